@@ -1,0 +1,74 @@
+"""Linear (hypo)elasticity with the Cam-clay interface, for the verification cases.
+
+Jaumann rate of Cauchy effective stress = ``C : D`` with constant ``E`` and ``nu``;
+the stress is rotated by Hughes-Winget and then ``C : dstrain`` is added, so the
+update is exact for small strain and objective for large rotation.
+Conventions as in :mod:`soil.camclay`.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from soil.errors import require
+from soil.kinematics import DEVIATORIC, IDENTITY, hughes_winget
+
+
+@dataclass(frozen=True)
+class LinearElastic:
+    """Isotropic linear elasticity.
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus (stress unit of the case).
+    nu : float
+        Poisson ratio in (-1, 0.5).
+    p0 : float
+        Initial isotropic mean effective stress (compression positive; 0 by default).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> mat = LinearElastic(E=1.0, nu=0.25)
+    >>> stress, state = mat.initial_state(1)
+    >>> stress, state, C = mat.update(stress, state, np.array([[1e-3, 0, 0, 0]]), np.zeros(1))
+    >>> np.allclose(stress[0, 0], C[0, 0, 0] * 1e-3)
+    True
+    """
+
+    E: float
+    nu: float
+    p0: float = 0.0
+
+    def __post_init__(self):
+        require(self.E > 0, f"material.E = {self.E} must be positive (Young's modulus)")
+        require(-1.0 < self.nu < 0.5,
+                f"material.nu = {self.nu} must lie in (-1, 0.5): use a Poisson ratio such as 0.3")
+
+    @property
+    def K(self):
+        """Bulk modulus."""
+        return self.E / (3 * (1 - 2 * self.nu))
+
+    @property
+    def G(self):
+        """Shear modulus."""
+        return self.E / (2 * (1 + self.nu))
+
+    @property
+    def stiffness(self):
+        """Elastic tangent (4, 4) from Voigt strain ``(xx, yy, zz, 2xy)`` to stress."""
+        return self.K * np.outer(IDENTITY, IDENTITY) + 2 * self.G * DEVIATORIC
+
+    def initial_state(self, n, p=None):
+        """Isotropic stress ``-p I`` and the (volume-only) state for n points."""
+        p = self.p0 if p is None else p
+        return -np.outer(np.broadcast_to(p, (n,)), IDENTITY), {"v": np.ones(n)}
+
+    def update(self, stress, state, dstrain, dspin):
+        """Rotate, then add ``C : dstrain``; returns stress, state and the tangent."""
+        dstrain = np.asarray(dstrain, dtype=float)
+        new = hughes_winget(stress, dspin) + dstrain @ self.stiffness.T
+        v = state["v"] * np.exp(dstrain[:, :3].sum(axis=1))
+        return new, {"v": v}, np.broadcast_to(self.stiffness, (len(new), 4, 4))
