@@ -224,12 +224,33 @@ def run_test(material, test, strain, points=200):
     return path_table(raw, shear=(test == "undrained-simple-shear"))
 
 
+def closed_form_q(clay, p):
+    """Undrained q at p' on the plastic part of a path from isotropic p'0 (design.md 3).
+
+    Original Cam-clay (normally consolidated): ``q/(M p') = ln(p'0/p') / Lambda``;
+    modified: ``p'/p'0 = [OCR M^2/(M^2 + eta^2)]^Lambda`` solved for ``q = eta p'``.
+    ``Lambda = (lambda - kappa)/lambda``; p' and q compression positive.
+
+    Examples
+    --------
+    >>> from soil.camclay import CamClay
+    >>> clay = CamClay(lam=0.11, kappa=0.04, M=1.42, nu=0.333, e0=0.83, p0=3.0)
+    >>> p_failure = 3.0 * np.exp(-clay.Lambda)
+    >>> round(float(closed_form_q(clay, p_failure) / (clay.M * p_failure)), 12)
+    1.0
+    """
+    M, L = clay.M, clay.Lambda
+    if clay.model == "original":
+        return M * p * np.log(clay.p0 / p) / L
+    return p * np.sqrt(M**2 * (clay.ocr * (clay.p0 / p) ** (1 / L) - 1))
+
+
 def path_table(raw, shear=False):
     """Reduce a raw :func:`integrate` table to ``step, eps_a, eps_v, p, q, pc``."""
     p, q = invariants(raw[["sxx", "syy", "szz", "sxy"]].to_numpy())
     return pd.DataFrame({
         "step": np.arange(len(raw)),
-        "eps_a": raw["gxy"].to_numpy() if shear else -raw["eyy"].to_numpy(),
-        "eps_v": -(raw["exx"] + raw["eyy"] + raw["ezz"]).to_numpy(),
+        "eps_a": (raw["gxy"] if shear else -raw["eyy"]).to_numpy() + 0.0,
+        "eps_v": 0.0 - (raw["exx"] + raw["eyy"] + raw["ezz"]).to_numpy(),
         "p": p, "q": q, "pc": raw["pc"].to_numpy(),
     })

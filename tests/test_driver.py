@@ -6,17 +6,8 @@ import pytest
 
 from conftest import table1
 from soil.camclay import CamClay
-from soil.driver import TESTS, Segment, integrate, run_test
+from soil.driver import TESTS, Segment, closed_form_q, integrate, run_test
 from soil.errors import InputError
-
-
-def closed_form_q(clay, p):
-    """Undrained q at p' from isotropic p'0 (design.md section 3)."""
-    M, L = clay.M, clay.Lambda
-    if clay.model == "original":
-        return M * p * np.log(clay.p0 / p) / L
-    eta2 = M**2 * (clay.ocr * (clay.p0 / p) ** (1 / L) - 1)
-    return p * np.sqrt(eta2)
 
 
 @pytest.mark.parametrize("model,ocr", [("original", 1.0), ("modified", 1.0), ("modified", 2.0)])

@@ -1,0 +1,88 @@
+"""The ``soilwater`` command: ``list``, ``path`` and ``report``.
+
+Errors the user can fix (bad input, a run that cannot converge) print one line,
+``soilwater: error: ...``, and exit with status 2; nothing is written.
+"""
+
+import argparse
+import sys
+
+from soil.errors import SoilwaterError
+
+
+def main(argv=None):
+    """Entry point of the console script; returns the exit status."""
+    parser = _parser()
+    args = parser.parse_args(argv)
+    try:
+        args.func(args)
+    except SoilwaterError as err:
+        print(f"soilwater: error: {err}", file=sys.stderr)
+        return 2
+    return 0
+
+
+def _parser():
+    from soil.driver import TESTS
+
+    parser = argparse.ArgumentParser(
+        prog="soilwater",
+        description="EFG and FEM side by side on soil-water coupled problems.")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("list", help="list the built-in cases")
+    p.set_defaults(func=_list)
+
+    p = sub.add_parser("path", help="stress-point driver: a material under a named test",
+                       description="Integrate the rate equations of a material under a "
+                       "prescribed velocity gradient (the paper's theoretical solution). "
+                       "Tests: " + "; ".join(f"{k}: {v}" for k, v in TESTS.items()))
+    p.add_argument("material", help="preset name (table1) or TOML file with [material]")
+    p.add_argument("--test", required=True, choices=list(TESTS), metavar="NAME",
+                   help="one of: " + ", ".join(TESTS))
+    p.add_argument("--strain", required=True, type=float,
+                   help="final axial strain (shear strain for simple shear), positive")
+    p.add_argument("--ocr", type=float, help="isotropic overconsolidation ratio p'c0/p'0")
+    p.add_argument("--model", choices=["original", "modified"], help="Cam-clay variant")
+    p.add_argument("--points", type=int, default=200, help="output rows (default 200)")
+    p.add_argument("--out", required=True, help="CSV file: step, eps_a, eps_v, p, q, pc")
+    p.set_defaults(func=_path)
+
+    p = sub.add_parser("report", help="regenerate every figure and table under reports/")
+    p.add_argument("--out", default="reports", help="report folder (default reports)")
+    p.set_defaults(func=_report)
+    return parser
+
+
+def _list(args):
+    from soil.problems import builtin_cases
+
+    cases = builtin_cases()
+    width = max(map(len, cases))
+    for name, case in cases.items():
+        print(f"{name:<{width}}  {case.description}")
+
+
+def _path(args):
+    from soil.driver import run_test
+    from soil.materials import load_material
+    from soil.results import write_csv
+
+    material = load_material(args.material, model=args.model, ocr=args.ocr)
+    if not hasattr(material, "rates"):
+        raise SoilwaterError(f"material {args.material!r} is elastic: the driver runs "
+                             "Cam-clay (model = original or modified)")
+    table = run_test(material, args.test, args.strain, points=args.points)
+    write_csv(table, args.out)
+    print(f"wrote {args.out} ({len(table)} rows)")
+
+
+def _report(args):
+    from comparisons.report import make_report
+
+    for path in make_report(args.out):
+        print(f"wrote {path}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

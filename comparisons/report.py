@@ -1,0 +1,27 @@
+"""``soilwater report``: regenerate every figure and table under ``reports/``."""
+
+from pathlib import Path
+
+from tqdm import tqdm
+
+from comparisons import figures, tables
+
+
+def make_report(root="reports"):
+    """Write the report files; returns the list of paths written.
+
+    Tables go to ``root/tables``, figures to ``root/figures``.
+    """
+    root = Path(root)
+    (root / "tables").mkdir(parents=True, exist_ok=True)
+    (root / "figures").mkdir(parents=True, exist_ok=True)
+    tasks = [
+        ("Table 1", lambda: tables.write(tables.table1(), root / "tables" / "table1")),
+        ("stress paths (driver)",
+         lambda: [figures.stress_paths_driver(root / "figures" / "stress_paths_driver.png")]),
+    ]
+    written = []
+    for name, task in (bar := tqdm(tasks, desc="report", unit="item")):
+        bar.set_postfix_str(name)
+        written += list(task())
+    return written
