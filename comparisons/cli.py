@@ -1,4 +1,4 @@
-"""The ``soilwater`` command: ``list``, ``path`` and ``report``.
+"""The ``soilwater`` command: ``list``, ``show``, ``path`` and ``report``.
 
 Errors the user can fix (bad input, a run that cannot converge) print one line,
 ``soilwater: error: ...``, and exit with status 2; nothing is written.
@@ -33,6 +33,14 @@ def _parser():
     p = sub.add_parser("list", help="list the built-in cases")
     p.set_defaults(func=_list)
 
+    p = sub.add_parser("show", help="validate a case and print its resolved definition",
+                       description="Load a built-in case or a TOML file, apply --set "
+                       "overrides, validate everything and print the case as JSON.")
+    p.add_argument("case", help="built-in case name or TOML file")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override an entry, e.g. material.permeability=1e-6 (repeatable)")
+    p.set_defaults(func=_show)
+
     p = sub.add_parser("path", help="stress-point driver: a material under a named test",
                        description="Integrate the rate equations of a material under a "
                        "prescribed velocity gradient (the paper's theoretical solution). "
@@ -61,6 +69,16 @@ def _list(args):
     width = max(map(len, cases))
     for name, case in cases.items():
         print(f"{name:<{width}}  {case.description}")
+
+
+def _show(args):
+    import json
+
+    from soil.problems import load_case
+
+    case = load_case(args.case, args.set)
+    print(json.dumps(case.to_dict(), indent=2))
+    print(f"# {len(case.nodes())} nodes, {len(case.times()) - 1} time steps")
 
 
 def _path(args):

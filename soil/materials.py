@@ -54,7 +54,7 @@ def material_from_spec(spec):
     keys = _ELASTIC_KEYS if model == "elastic" else _CAMCLAY_KEYS
     unknown = sorted(set(values) - set(keys))
     require(not unknown, f"material: unknown key(s) {', '.join(unknown)} for model "
-            f"{model!r}: allowed are {', '.join(keys)}")
+            f"{model!r}: allowed are {', '.join(keys)} (and in a case {', '.join(FLUID_KEYS)})")
     kwargs = {keys[k]: v for k, v in values.items()}
     try:
         if model == "elastic":

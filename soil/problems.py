@@ -389,16 +389,22 @@ def _apply_override(data, text):
         require(isinstance(table, dict), f"override {text!r}: "
                 f"{'.'.join(path[:depth + 1])} is a value, not a section")
     last = path[-1]
-    if path[0] == "time":
-        for other in (_GEOMETRIC if last == "steps" else ("steps",) if last in _GEOMETRIC
-                      else ()):
-            table.pop(other, None)
-    if path[0] == "boundary" and len(path) == 3 and path[1] in EDGES:
-        if last == "displacement":
-            table.pop("ux", None), table.pop("uy", None)
-        elif last in ("ux", "uy") and "displacement" in table:
-            table.update(_expand_displacement(table.pop("displacement"), path[1]))
+    for other in _replaced_keys(path):
+        table.pop(other, None)
+    if len(path) == 3 and last in ("ux", "uy") and "displacement" in table:
+        table.update(_expand_displacement(table.pop("displacement"), path[1]))
     table[last] = value
+
+
+def _replaced_keys(path):
+    """Keys that an override of ``path`` replaces (the other way of saying the same)."""
+    if path[0] == "time" and path[-1] == "steps":
+        return _GEOMETRIC
+    if path[0] == "time" and path[-1] in _GEOMETRIC:
+        return ("steps",)
+    if path[0] == "boundary" and path[-1] == "displacement":
+        return ("ux", "uy")
+    return ()
 
 
 def case_from_dict(data):
@@ -443,9 +449,9 @@ def _section(data, name, default=_REQUIRED):
 
 def _check_keys(table, allowed, where, what="key"):
     """Reject keys of ``table`` outside ``allowed``."""
-    unknown = [k for k in table if k not in allowed]
-    require(not unknown, f"{where}: unknown {what} {unknown[0]!r}: "
-            f"allowed are {', '.join(allowed)}")
+    for key in table:
+        require(key in allowed, f"{where}: unknown {what} {key!r}: "
+                f"allowed are {', '.join(allowed)}")
 
 
 def _number(table, key, where, default=_REQUIRED):
@@ -470,8 +476,9 @@ def _string(table, key, where, default, choices=None):
     """A string entry, optionally one of ``choices``."""
     value = table.get(key, default)
     require(isinstance(value, str), f"{where}.{key} = {value!r} must be a string")
-    require(choices is None or value in choices,
-            f"{where}.{key} = {value!r} is unknown: use one of {', '.join(choices)}")
+    if choices is not None:
+        require(value in choices,
+                f"{where}.{key} = {value!r} is unknown: use one of {', '.join(choices)}")
     return value
 
 
@@ -528,7 +535,7 @@ def _initial(table):
         return Initial("balance")
     require(not isinstance(value, str), f"initial.pore_pressure = {value!r} must be a "
             "number or \"balance\"")
-    return Initial(_number(table, "pore_pressure", "initial"))
+    return Initial(_number(table, "pore_pressure", "initial", 0.0))
 
 
 def _expand_displacement(value, side):
@@ -542,9 +549,9 @@ def _expand_displacement(value, side):
 
 def _boundary(table, loading):
     _check_keys(table, EDGES, "boundary", "edge")
-    missing = [side for side in EDGES if side not in table]
-    require(not missing, f"boundary: edge {missing[0]!r} is missing: add [boundary."
-            f"{missing[0]}] (every edge of the rectangle exactly once)")
+    for side in EDGES:
+        require(side in table, f"boundary: edge {side!r} is missing: add [boundary.{side}] "
+                "(every edge of the rectangle exactly once)")
     boundary = Boundary(**{side: _edge(_section(table, side), side, loading)
                            for side in EDGES})
     for a, b in _CORNERS:
@@ -572,7 +579,7 @@ def _edge(table, side, loading):
             f"{where}: 'rigid' applies to uy of the top or bottom edge only")
     for comp, t in zip(("ux", "uy"), edge.traction):
         kind = getattr(edge, comp)
-        require("prescribed" != kind or np.any(loading.L),
+        require(kind != "prescribed" or np.any(loading.L),
                 f"{where}.{comp} = 'prescribed' needs a non-zero "
                 "loading.velocity_gradient: set it, or use 'fixed'")
         require(t == 0 or kind in ("free", "rigid"), f"{where}.traction acts on {comp}, "
@@ -588,7 +595,7 @@ def _loading(table):
     L = tuple(_pair(row, "loading.velocity_gradient row") for row in L)
     load = table.get("load", 1.0)
     if not isinstance(load, (list, tuple)):
-        return Loading(L, _number(table, "load", "loading"))
+        return Loading(L, _number(table, "load", "loading", 1.0))
     points = tuple(_pair(p, "loading.load point [t, factor]") for p in load)
     times = [t for t, _ in points]
     require(points and times[0] >= 0 and all(np.diff(times) > 0), "loading.load: give "

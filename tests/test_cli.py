@@ -2,6 +2,7 @@
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -45,3 +46,36 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, args, word):
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("soilwater: error:") and word in lines[0]
     assert not out.exists() and list(tmp_path.iterdir()) == [tmp_path / "clay.toml"]
+
+
+def test_list_names_every_builtin_case_with_a_description(capsys):
+    from soil.problems import builtin_cases
+
+    assert main(["list"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert [line.split()[0] for line in lines] == list(builtin_cases())
+    assert all(len(line.split()) > 3 for line in lines)
+
+
+def test_show_applies_overrides(capsys):
+    assert main(["show", "soil-column", "--set", "discretisation.ny=41"]) == 0
+    assert "# 123 nodes" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("args,word", [
+    (["show", "unconfined-compresion"], "unconfined-compresion"),
+    (["show", "case.toml"], "viscosity"),
+    (["show", "soil-column", "--set", "material.permeability=-1e-5"], "permeability"),
+    (["show", "soil-column", "--set", "material.nu=0.5"], "nu"),
+    (["show", "soil-column", "--set", "material.p0=0"], "p0"),
+    (["show", "soil-column", "--set", "material.lambda=0.01"], "lambda"),
+])
+def test_bad_case_input_is_one_line(tmp_path, args, word):
+    (tmp_path / "case.toml").write_text(
+        (Path(__file__).parents[1] / "cases" / "terzaghi.toml").read_text()
+        .replace("end = 10.0", "end = 10.0\nviscosity = 1e-3"))
+    proc = subprocess.run([sys.executable, "-m", "comparisons.cli"] + args, cwd=tmp_path,
+                          capture_output=True, text=True)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and word in lines[0], proc.stderr

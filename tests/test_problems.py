@@ -1,0 +1,155 @@
+"""Case definitions: TOML twins, nodes, time levels, overrides and input errors."""
+
+import json
+import pickle
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from soil.camclay import CamClay
+from soil.elastic import LinearElastic
+from soil.errors import InputError
+from soil.problems import builtin_cases, case_from_dict, load_case
+
+CASES = Path(__file__).resolve().parents[1] / "cases"
+BUILTIN = builtin_cases()
+
+
+@pytest.mark.parametrize("name", list(BUILTIN))
+def test_toml_twin_equals_builtin(name):
+    assert load_case(CASES / f"{name}.toml") == BUILTIN[name]
+
+
+def test_every_twin_is_a_builtin():
+    assert sorted(p.stem for p in CASES.glob("*.toml")) == sorted(BUILTIN)
+
+
+@pytest.mark.parametrize("name", list(BUILTIN))
+def test_round_trip_pickle_and_json(name):
+    case = BUILTIN[name]
+    assert case.description and "\n" not in case.description
+    assert pickle.loads(pickle.dumps(case)) == case
+    assert case_from_dict(json.loads(json.dumps(case.to_dict()))) == case
+
+
+def test_unconfined_compression_has_111_nodes():
+    case = BUILTIN["unconfined-compression"]
+    nodes = case.nodes()
+    assert nodes.shape == (111, 2)
+    assert len(np.unique(nodes, axis=0)) == 111
+    assert np.allclose(nodes.min(axis=0), 0) and np.allclose(nodes.max(axis=0), [3, 4])
+    assert case.spacing == (0.5, 0.5)
+    assert np.allclose(nodes[63], [0.25, 0.25])  # first cell centre after the 63 grid nodes
+    assert case.initial_pore_pressure == -3.0
+    assert isinstance(case.material(), CamClay) and case.material().ocr == 1.0
+
+
+def test_terzaghi_times_match_moose(peer):
+    t = BUILTIN["terzaghi"].times()
+    assert len(t) - 1 == 118 and t[0] == 0 and t[-1] == 10
+    assert np.allclose(t[1:4], [1e-4, 1.5e-4, 2.25e-4], rtol=1e-12)
+    moose = np.loadtxt(peer / "moose_poromech_terzaghi_Q1Q1_consistent.csv",
+                       delimiter=",", skiprows=1)[:, 0]
+    assert np.allclose(t[1:], moose, rtol=1e-12, atol=0)
+
+
+def test_terzaghi_material_and_fluid():
+    case = BUILTIN["terzaghi"]
+    mat = case.material()
+    assert isinstance(mat, LinearElastic)
+    assert np.isclose(mat.G, 3.0) and np.isclose(mat.K - 2 * mat.G / 3, 2.0)  # lambda = 2
+    assert case.fluid.mobility == 1.5 and case.fluid.storage == 0.0625
+    assert [p.name for p in case.probes] == [f"p{k}" for k in range(10)] + ["p99"]
+
+
+def test_equal_steps_and_load_functions():
+    case = BUILTIN["soil-column"]
+    assert np.allclose(np.diff(BUILTIN["unconfined-compression"].times()), 0.2)
+    assert list(case.loading.factor([0.0, 1e-9, 1.0])) == [0.0, 1.0, 1.0]
+    ramp = load_case("soil-column", ["loading.load=[[0.0, 0.0], [1.0, 2.0]]"])
+    assert ramp.loading.factor(0.25) == pytest.approx(0.5)
+
+
+def test_overrides_change_the_case():
+    assert len(load_case("unconfined-compression", ["discretisation.nx=5"]).nodes()) \
+        == 5 * 9 + 4 * 8
+    case = load_case("terzaghi", ["time.steps=20", "boundary.top.water=impermeable",
+                                  "material.permeability=1e-6"])
+    assert len(case.times()) == 21 and case.time.dt0 is None
+    assert not case.boundary.top.drained and case.fluid.permeability == 1e-6
+    fixed = load_case("soil-column", ['boundary.left.displacement="fixed"'])
+    assert fixed.boundary.left.uy == "fixed"
+    freed = load_case(CASES / "soil-column.toml", ['boundary.left.uy="fixed"'])
+    assert (freed.boundary.left.ux, freed.boundary.left.uy) == ("fixed", "fixed")
+
+
+def test_toml_without_name_takes_the_file_stem(tmp_path):
+    text = (CASES / "terzaghi.toml").read_text().replace('name = "terzaghi"\n', "")
+    path = tmp_path / "my-column.toml"
+    path.write_text(text)
+    assert load_case(path).name == "my-column"
+
+
+BAD = [
+    ("no-such-case", [], "terzaghi"),  # lists the known names
+    ("terzaghi", ["solver.tol=1"], "'solver'"),
+    ("terzaghi", ["discretisation.nz=3"], "'nz'"),
+    ("terzaghi", ["time.dt=0.1"], "'dt'"),
+    ("terzaghi", ["material.permeability=-1e-3"], "material.permeability"),
+    ("terzaghi", ['material.permeability="fast"'], "material.permeability"),
+    ("terzaghi", ["material.storage=-1"], "material.storage"),
+    ("terzaghi", ["probes.far=[3.0, 5.0]"], "probes.far"),
+    ("terzaghi", ['boundary.top.uy="sliding"'], "boundary.top.uy"),
+    ("terzaghi", ['boundary.top.water="wet"'], "boundary.top.water"),
+    ("terzaghi", ['boundary.top.ux="rigid"'], "rigid"),
+    ("terzaghi", ['boundary.top.uy="prescribed"'], "velocity_gradient"),
+    ("terzaghi", ['boundary.middle.ux="fixed"'], "'middle'"),
+    ("terzaghi", ["boundary.bottom.traction=[0.0, -1.0]"], "boundary.bottom.traction"),
+    ("unconfined-compression", ['boundary.right.uy="fixed"'], "boundary.right.uy"),
+    ("terzaghi", ["time.end=0"], "time.end"),
+    ("terzaghi", ["time.end=-1"], "time.end"),
+    ("terzaghi", ["time.steps=0"], "time.steps"),
+    ("terzaghi", ["time.growth=1.0"], "time.growth"),
+    ("simple-shear", ["time.dt0=0.1"], "dt0, growth, dt_max"),
+    ("terzaghi", ["discretisation.nx=1"], "discretisation.nx"),
+    ("terzaghi", ["discretisation.ny=1"], "discretisation.ny"),
+    ("terzaghi", ["discretisation.nx=2.5"], "discretisation.nx"),
+    ("terzaghi", ['discretisation.layout="random"'], "discretisation.layout"),
+    ("terzaghi", ["material.permeability"], "material.permeability"),
+    ("terzaghi", ["time.end.x=1"], "time.end"),
+    ("terzaghi", ['initial.pore_pressure="hydrostatic"'], "initial.pore_pressure"),
+    ("terzaghi", ["loading.load=[[1.0, 1.0], [0.5, 0.0]]"], "loading.load"),
+    ("unconfined-compression", ["material.lambda=0.03"], "lambda"),
+    ("unconfined-compression", ["material.nu=0.5"], "material.nu"),
+    ("unconfined-compression", ["material.colour=1"], "colour"),
+]
+
+
+@pytest.mark.parametrize("case,overrides,names", BAD)
+def test_bad_input_names_the_parameter(case, overrides, names):
+    with pytest.raises(InputError) as info:
+        load_case(case, overrides)
+    message = str(info.value)
+    assert names in message and "\n" not in message
+
+
+def test_missing_edge_and_bad_file(tmp_path):
+    path = tmp_path / "no-top.toml"
+    text = (CASES / "terzaghi.toml").read_text()
+    path.write_text(text[:text.index("[boundary.top]")] + text[text.index("[time]"):])
+    with pytest.raises(InputError, match="'top' is missing"):
+        load_case(path)
+    path.write_text("[geometry\nwidth = 1")
+    with pytest.raises(InputError, match="not valid TOML"):
+        load_case(path)
+    with pytest.raises(InputError, match="does not exist"):
+        load_case(tmp_path / "absent.toml")
+
+
+def test_lambda_not_above_kappa_in_a_case_file(tmp_path):
+    text = (CASES / "soil-column.toml").read_text()
+    path = tmp_path / "soft.toml"
+    path.write_text(text.replace('model = "original"', 'model = "original"\nlambda = 0.04'))
+    with pytest.raises(InputError, match="lambda"):
+        load_case(path)
