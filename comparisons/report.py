@@ -4,7 +4,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from comparisons import figures, tables
+from comparisons import figures, peers, tables
 
 
 def make_report(root="reports"):
@@ -17,6 +17,8 @@ def make_report(root="reports"):
     (root / "figures").mkdir(parents=True, exist_ok=True)
     tasks = [
         ("Table 1", lambda: tables.write(tables.table1(), root / "tables" / "table1")),
+        ("peer single-point data",
+         lambda: tables.write(peers.summary(), root / "tables" / "peer_single_point")),
         ("stress paths (driver)",
          lambda: [figures.stress_paths_driver(root / "figures" / "stress_paths_driver.png")]),
     ]

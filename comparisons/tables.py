@@ -29,7 +29,9 @@ def table1(preset="table1"):
 def to_markdown(frame, floatfmt="{:.6g}"):
     """A GitHub Markdown table of ``frame`` (no extra dependency)."""
     def cell(x):
-        return floatfmt.format(x) if isinstance(x, float) else str(x)
+        if isinstance(x, float):
+            return "-" if x != x else floatfmt.format(x)
+        return str(x)
 
     lines = ["| " + " | ".join(map(str, frame.columns)) + " |",
              "|" + "---|" * len(frame.columns)]

@@ -1,20 +1,17 @@
 """Shared fixtures: the paper's Table 1 clay and the peer-data folder."""
 
-from pathlib import Path
-
 import pytest
 
+from comparisons.peers import PEER_DATA
 from soil.camclay import CamClay
-
-PEER = Path(__file__).resolve().parents[2] / "shared" / "peer-data"
 
 
 @pytest.fixture
 def peer():
     """Folder of the peer reference results (MOOSE, GEOS, MFront/OpenGeoSys)."""
-    if not PEER.is_dir():
-        pytest.fail(f"peer data not found at {PEER}: the repo must sit beside shared/")
-    return PEER
+    if not PEER_DATA.is_dir():
+        pytest.fail(f"peer data not found at {PEER_DATA}: the repo must sit beside shared/")
+    return PEER_DATA
 
 
 def table1(model="original", ocr=1.0):
