@@ -1,0 +1,134 @@
+"""MLS weight functions of the normalised distance ``r = d / d_mI`` (design.md section 5).
+
+Each weight peaks at ``r = 0``, decreases to 0 at ``r = 1`` and is zero for ``r > 1``:
+
+* quartic spline (``Q``): ``1 - 6r^2 + 8r^3 - 3r^4``;
+* cubic spline: ``2/3 - 4r^2 + 4r^3`` for ``r <= 1/2`` and
+  ``4/3 - 4r + 4r^2 - 4r^3/3`` for ``1/2 < r <= 1`` (``w(0) = 2/3``);
+* exponential with parameter ``c > 0``:
+  ``(exp(-(r/c)^2) - exp(-(1/c)^2)) / (1 - exp(-(1/c)^2))``; ``E-A`` is ``c = 0.5`` and
+  ``E-B`` is ``c = 0.25`` (sharper, nearly interpolating). It is only C0 at ``r = 1``.
+
+A case names a weight by a string read by :func:`get_weight`. A :class:`Weight` is a small
+value object (an integer kind code and the parameter ``c``); numba kernels call
+:func:`weight_scalar` with those two numbers, and calling the object evaluates ``w`` and
+``dw/dr`` on whole arrays. numba's on-disk cache does not track calls across files:
+after editing this module, delete the ``*.nbi`` and ``*.nbc`` files in ``efg/__pycache__``
+so that the kernels of :mod:`efg.mls` are compiled again.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from soil.errors import InputError
+
+QUARTIC, CUBIC, EXPONENTIAL = 0, 1, 2
+ALIASES = {"q": "quartic", "e-a": "exp:0.5", "e-b": "exp:0.25"}
+FORMS = "quartic (alias Q), cubic, exp:C with C > 0 (E-A = exp:0.5, E-B = exp:0.25)"
+
+
+@numba.njit(cache=True)
+def weight_scalar(kind, c, r):
+    """Weight and its derivative at one normalised distance.
+
+    Parameters
+    ----------
+    kind : int
+        ``QUARTIC``, ``CUBIC`` or ``EXPONENTIAL``.
+    c : float
+        Parameter of the exponential weight (ignored by the splines).
+    r : float
+        Normalised distance ``d / d_mI`` (dimensionless, >= 0).
+
+    Returns
+    -------
+    w, dw_dr : float
+        Zero for ``r >= 1``.
+    """
+    if r >= 1.0:
+        return 0.0, 0.0
+    if kind == QUARTIC:
+        return 1.0 - r * r * (6.0 - 8.0 * r + 3.0 * r * r), -12.0 * r * (1.0 - r) ** 2
+    if kind == CUBIC:
+        if r <= 0.5:
+            return 2.0 / 3.0 - 4.0 * r * r + 4.0 * r ** 3, r * (12.0 * r - 8.0)
+        return 4.0 / 3.0 - 4.0 * r + 4.0 * r * r - 4.0 * r ** 3 / 3.0, -4.0 * (1.0 - r) ** 2
+    tail = math.exp(-1.0 / (c * c))
+    g = math.exp(-(r / c) ** 2)
+    return (g - tail) / (1.0 - tail), -2.0 * r / (c * c) * g / (1.0 - tail)
+
+
+@numba.njit(cache=True)
+def _evaluate(kind, c, r):
+    """``weight_scalar`` over a 1-D array: ``(w, dw_dr)`` arrays."""
+    w, dw = np.empty_like(r), np.empty_like(r)
+    for k in range(r.size):
+        w[k], dw[k] = weight_scalar(kind, c, r[k])
+    return w, dw
+
+
+@dataclass(frozen=True)
+class Weight:
+    """A weight function: canonical ``name``, integer ``kind`` code and parameter ``c``.
+
+    Calling it on ``r`` (any shape, dimensionless, >= 0) returns ``(w, dw_dr)`` of that
+    shape.
+
+    Examples
+    --------
+    >>> w, dw = get_weight("Q")([0.5, 1.5])
+    >>> w.tolist(), dw.tolist()
+    ([0.3125, 0.0], [-1.5, 0.0])
+    """
+
+    name: str
+    kind: int
+    c: float = 0.0
+
+    def __call__(self, r):
+        r = np.asarray(r, dtype=float)
+        w, dw = _evaluate(self.kind, self.c, r.ravel())
+        return w.reshape(r.shape), dw.reshape(r.shape)
+
+    def __str__(self):
+        return self.name
+
+
+def get_weight(name):
+    """The :class:`Weight` a case names.
+
+    Parameters
+    ----------
+    name : str or Weight
+        ``quartic``, ``cubic`` or ``exp:C`` (any ``C > 0``), case-insensitive; aliases
+        ``Q``, ``E-A`` (``exp:0.5``) and ``E-B`` (``exp:0.25``). A Weight passes through.
+
+    Raises
+    ------
+    InputError
+        For any other name, listing the valid forms.
+
+    Examples
+    --------
+    >>> get_weight("E-B")
+    Weight(name='exp:0.25', kind=2, c=0.25)
+    """
+    if isinstance(name, Weight):
+        return name
+    key = str(name).strip().lower()
+    key = ALIASES.get(key, key)
+    if key == "quartic":
+        return Weight("quartic", QUARTIC)
+    if key == "cubic":
+        return Weight("cubic", CUBIC)
+    head, _, value = key.partition(":")
+    try:
+        c = float(value) if head == "exp" else math.nan
+    except ValueError:
+        c = math.nan
+    if not (math.isfinite(c) and c > 0):
+        raise InputError(f"weight {name!r} is unknown: use {FORMS}")
+    return Weight(f"exp:{c:g}", EXPONENTIAL, c)
