@@ -19,6 +19,10 @@ def make_report(root="reports"):
         ("Table 1", lambda: tables.write(tables.table1(), root / "tables" / "table1")),
         ("peer single-point data",
          lambda: tables.write(peers.summary(), root / "tables" / "peer_single_point")),
+        ("shape functions (Fig. 7)",
+         lambda: [figures.shape_functions(root / "figures" / "shape_functions.png")]),
+        ("background cells (Figs. 3, 5)",
+         lambda: [figures.background_cells(root / "figures" / "cells.png")]),
         ("stress paths (driver)",
          lambda: [figures.stress_paths_driver(root / "figures" / "stress_paths_driver.png")]),
     ]
