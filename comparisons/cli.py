@@ -1,4 +1,4 @@
-"""The ``soilwater`` command: ``list``, ``show``, ``path`` and ``report``.
+"""The ``soilwater`` command: ``list``, ``show``, ``run``, ``path`` and ``report``.
 
 Errors the user can fix (bad input, a run that cannot converge) print one line,
 ``soilwater: error: ...``, and exit with status 2; nothing is written.
@@ -41,6 +41,17 @@ def _parser():
                    help="override an entry, e.g. material.permeability=1e-6 (repeatable)")
     p.set_defaults(func=_show)
 
+    p = sub.add_parser("run", help="run a case with a method and write its result folder",
+                       description="Solve a case (built-in name or TOML file) and write "
+                       "DIR/summary.json, DIR/history.csv and DIR/fields.pvd with VTU files. "
+                       "DIR is replaced only when the run succeeds.")
+    p.add_argument("case", help="built-in case name or TOML file")
+    p.add_argument("--method", required=True, choices=list(METHODS), help="solver")
+    p.add_argument("--out", required=True, metavar="DIR", help="result folder")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a case entry, e.g. efg.cells=squares (repeatable)")
+    p.set_defaults(func=_run)
+
     p = sub.add_parser("path", help="stress-point driver: a material under a named test",
                        description="Integrate the rate equations of a material under a "
                        "prescribed velocity gradient (the paper's theoretical solution). "
@@ -79,6 +90,36 @@ def _show(args):
     case = load_case(args.case, args.set)
     print(json.dumps(case.to_dict(), indent=2))
     print(f"# {len(case.nodes())} nodes, {len(case.times()) - 1} time steps")
+
+
+def _run(args):
+    from soil.problems import load_case
+
+    case = load_case(args.case, args.set)
+    result = METHODS[args.method](case)
+    result.write(args.out)
+    print(f"wrote {args.out}: {json_line(result.summary)}")
+
+
+def _efg(case):
+    if case.analysis != "static":
+        raise SoilwaterError(f"case {case.name!r}: method efg runs static cases "
+                             "(analysis = 'static') so far; the coupled u-p solver is next")
+    from efg.statics import solve
+
+    return solve(case)
+
+
+#: Solvers by method name: ``case -> Result``.
+METHODS = {"efg": _efg}
+
+
+def json_line(summary):
+    """A short one-line digest of a run summary for the terminal."""
+    errors = summary.get("errors", {})
+    text = ", ".join(f"{k} error {v:.3g}" for k, v in errors.items())
+    return f"{summary.get('steps')} step(s), {summary.get('dofs')} dofs" + (
+        f", {text}" if text else "")
 
 
 def _path(args):

@@ -13,6 +13,8 @@ Schema (every case has the same one; unknown keys are an error)::
 
     name = "my-case"                  # default: the file's stem
     description = "one line"
+    analysis = "coupled"              # "coupled" (Biot u-p, default) or "static" (dry,
+                                      # one load step, no pore pressure)
 
     [geometry]
     shape = "rectangle"               # the only shape
@@ -56,12 +58,28 @@ Schema (every case has the same one; unknown keys are an error)::
     [probes]                          # optional: name = [x, y] inside the domain;
     centre = [1.5, 2.0]               # history columns are named like "p_w@centre"
 
+    [exact]                           # optional: a closed form of soil.analytical
+    solution = "timoshenko-beam"      # boundary data for "exact" edges, error reference
+    P = 1000.0                        # ... and the solution's parameters
+
+    [efg]                             # optional meshless settings (defaults shown)
+    weight_u = "quartic"              # MLS weight of u: quartic, cubic, exp:C (E-A = exp:0.5)
+    scale_u = 1.3                     # support = scale x distance to the 8th nearest node
+    weight_p = "quartic"              # the same for the pore pressure p_w
+    scale_p = 1.3
+    cells = "delaunay"                # background cells: delaunay or squares
+    order = 2                         # Gauss order (squares: per direction; triangles: degree)
+    penalty = 1e6                     # penalty factor relative to the stiffness scale
+    correction = "vci"                # consistent test gradients (efg.vci) or "none"
+
 Boundary kinds of a displacement component:
 
 * ``free``: natural; the edge's traction component acts there.
 * ``fixed``: zero displacement.
 * ``prescribed``: velocity ``v = L x`` at the node's current position, L from
   ``loading.velocity_gradient`` (which must then be non-zero).
+* ``exact``: displacement from the case's ``[exact]`` solution; ``traction = "exact"``
+  likewise takes the traction ``sigma n`` from it.
 * ``rigid`` (``uy`` of the top or bottom edge only): the whole edge settles by one unknown
   uniform vertical displacement (a frictionless rigid plate, Mandel's problem) whose total
   force is ``traction[1] x load factor x (initial edge length)`` per unit thickness.
@@ -89,15 +107,16 @@ from pathlib import Path
 
 import numpy as np
 
+from soil.analytical import exact_solution
 from soil.errors import InputError, require
 from soil.materials import FLUID_KEYS, material_from_spec
 
 EDGES = ("left", "right", "bottom", "top")
-KINDS = ("free", "fixed", "prescribed", "rigid")
+KINDS = ("free", "fixed", "prescribed", "rigid", "exact")
 WATER = ("drained", "impermeable")
 LAYOUTS = ("grid", "grid+centres")
 SECTIONS = ("geometry", "discretisation", "material", "initial", "boundary", "loading",
-            "time", "probes")
+            "time", "probes", "exact", "efg")
 MAX_STEPS = 100_000
 
 _KEYS = {
@@ -107,7 +126,12 @@ _KEYS = {
     "edge": ("ux", "uy", "displacement", "traction", "water"),
     "loading": ("velocity_gradient", "load"),
     "time": ("end", "steps", "dt0", "growth", "dt_max"),
+    "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "cells", "order", "penalty",
+            "correction"),
 }
+CORRECTIONS = ("vci", "none")
+CELLS = ("delaunay", "squares")
+ANALYSES = ("coupled", "static")
 _GEOMETRIC = ("dt0", "growth", "dt_max")
 _NORMAL = {"left": "ux", "right": "ux", "bottom": "uy", "top": "uy"}
 _CORNERS = (("left", "bottom"), ("left", "top"), ("right", "bottom"), ("right", "top"))
@@ -244,6 +268,33 @@ class Probe:
 
 
 @dataclass(frozen=True)
+class EFGSettings:
+    """Meshless settings: MLS weight and support scale factor for u and p_w, cells, penalty.
+
+    Weights are named as in :mod:`efg.weights` (``quartic``, ``cubic``, ``exp:0.5``, ...);
+    ``cells`` is ``delaunay`` (rebuilt every step) or ``squares`` (quarter cells along
+    the boundary); ``order`` is the Gauss order of the cells; ``penalty`` is the penalty
+    factor relative to the stiffness scale (P-wave modulus over nodal spacing);
+    ``correction`` is ``vci`` (variationally consistent test-function gradients, which
+    pass the patch test with any quadrature; :mod:`efg.vci`) or ``none`` (plain Gauss
+    quadrature of the MLS gradients, as in the paper).
+    """
+
+    weight_u: str = "quartic"
+    scale_u: float = 1.3
+    weight_p: str = "quartic"
+    scale_p: float = 1.3
+    cells: str = "delaunay"
+    order: int = 2
+    penalty: float = 1e6
+    correction: str = "vci"
+
+    def to_dict(self):
+        """The settings as a plain dict."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
 class Case:
     """A validated problem: geometry, nodes, material, fluid, boundary, loading, time, probes.
 
@@ -254,6 +305,7 @@ class Case:
 
     name: str
     description: str
+    analysis: str
     geometry: Geometry
     discretisation: Discretisation
     material_spec: tuple[tuple[str, float | str], ...]
@@ -263,6 +315,15 @@ class Case:
     loading: Loading
     time: TimeStepping
     probes: tuple[Probe, ...] = ()
+    exact: tuple[tuple[str, object], ...] = ()
+    efg: EFGSettings = EFGSettings()
+
+    def exact_solution(self):
+        """``points -> (u, stress)`` of the ``[exact]`` solution, or None (soil.analytical)."""
+        if not self.exact:
+            return None
+        params = dict(self.exact)
+        return exact_solution(params.pop("solution"), **params)
 
     def material(self):
         """The soil skeleton (``CamClay`` or ``LinearElastic``) built from the spec."""
@@ -288,6 +349,18 @@ class Case:
         xc, yc = (x[:-1] + x[1:]) / 2, (y[:-1] + y[1:]) / 2
         return np.concatenate([grid, np.stack(np.meshgrid(xc, yc), axis=-1).reshape(-1, 2)])
 
+    def boundary_loop(self):
+        """Indices into :meth:`nodes` of the boundary nodes, counter-clockwise, each once.
+
+        From the lower-left corner: bottom edge left to right, right edge up, top edge right
+        to left, left edge down; ``2 (nx + ny) - 4`` indices (cell centres are never on the
+        boundary). ``nodes[case.boundary_loop()]`` is the boundary polygon.
+        """
+        nx, ny = self.discretisation.nx, self.discretisation.ny
+        i, j = np.arange(nx), np.arange(ny)
+        return np.concatenate([i, j[1:] * nx + nx - 1, (ny - 1) * nx + i[-2::-1],
+                               j[-2:0:-1] * nx])
+
     def times(self):
         """Time levels [s], from 0 to ``time.end``; ``len - 1`` steps."""
         return self.time.levels()
@@ -303,7 +376,7 @@ class Case:
         """The case as a plain nested dict in TOML layout (defaults filled in)."""
         time = {k: v for k, v in asdict(self.time).items() if v is not None}
         return _plain({
-            "name": self.name, "description": self.description,
+            "name": self.name, "description": self.description, "analysis": self.analysis,
             "geometry": asdict(self.geometry),
             "discretisation": asdict(self.discretisation),
             "material": {**dict(self.material_spec), **asdict(self.fluid)},
@@ -312,6 +385,8 @@ class Case:
             "loading": asdict(self.loading),
             "time": time,
             "probes": {p.name: p.point for p in self.probes},
+            "exact": dict(self.exact),
+            "efg": self.efg.to_dict(),
         })
 
 
@@ -417,7 +492,7 @@ def case_from_dict(data):
         :func:`soil.materials.material_from_spec`.
     """
     require(isinstance(data, dict), "a case must be a table of sections")
-    _check_keys(data, ("name", "description") + SECTIONS, "case", "section")
+    _check_keys(data, ("name", "description", "analysis") + SECTIONS, "case", "section")
     geometry = _geometry(_section(data, "geometry"))
     material_spec, fluid = _material(_section(data, "material"))
     probes = _probes(_section(data, "probes", {}), geometry)
@@ -425,6 +500,7 @@ def case_from_dict(data):
     case = Case(
         name=_string(data, "name", "case", "case"),
         description=_string(data, "description", "case", ""),
+        analysis=_string(data, "analysis", "case", "coupled", ANALYSES),
         geometry=geometry,
         discretisation=_discretisation(_section(data, "discretisation")),
         material_spec=material_spec, fluid=fluid,
@@ -433,7 +509,10 @@ def case_from_dict(data):
         loading=loading,
         time=_time(_section(data, "time")),
         probes=probes,
+        exact=_exact(_section(data, "exact", {})),
+        efg=_efg(_section(data, "efg", {})),
     )
+    _require_exact_if_used(case)
     case.times()
     return case
 
@@ -573,18 +652,71 @@ def _edge(table, side, loading):
         table.update(_expand_displacement(table.pop("displacement"), side))
     edge = Edge(ux=_string(table, "ux", where, "free", KINDS),
                 uy=_string(table, "uy", where, "free", KINDS),
-                traction=_pair(table.get("traction", (0.0, 0.0)), f"{where}.traction"),
+                traction=_traction(table.get("traction", (0.0, 0.0)), f"{where}.traction"),
                 water=_string(table, "water", where, "impermeable", WATER))
     require(edge.ux != "rigid" and (edge.uy != "rigid" or side in ("top", "bottom")),
             f"{where}: 'rigid' applies to uy of the top or bottom edge only")
-    for comp, t in zip(("ux", "uy"), edge.traction):
+    for comp, t in zip(("ux", "uy"), np.broadcast_to(np.asarray(edge.traction, object), 2)):
         kind = getattr(edge, comp)
         require(kind != "prescribed" or np.any(loading.L),
                 f"{where}.{comp} = 'prescribed' needs a non-zero "
                 "loading.velocity_gradient: set it, or use 'fixed'")
-        require(t == 0 or kind in ("free", "rigid"), f"{where}.traction acts on {comp}, "
+        require(edge.traction == "exact" or t == 0 or kind in ("free", "rigid"),
+                f"{where}.traction acts on {comp}, "
                 f"which is {kind!r}: set that traction component to 0 or {comp} free")
     return edge
+
+
+def _traction(value, where):
+    """``[tx, ty]`` or ``"exact"`` (from the case's exact solution)."""
+    return "exact" if value == "exact" else _pair(value, where)
+
+
+def _exact(table):
+    """``[exact]``: ``solution`` (see soil.analytical.SOLUTIONS) and its parameters."""
+    if not table:
+        return ()
+    require("solution" in table, "exact: name the solution, e.g. solution = "
+            "\"timoshenko-beam\" (see soil/analytical.py)")
+    params = {k: v for k, v in table.items() if k != "solution"}
+    try:
+        exact_solution(table["solution"], **params)(np.zeros((1, 2)))
+    except TypeError as err:
+        raise InputError(f"exact: bad parameters for {table['solution']!r}: {err}") from None
+    return tuple(sorted((k, _frozen(v)) for k, v in table.items()))
+
+
+def _frozen(value):
+    """Lists to tuples, recursively (hashable, comparable)."""
+    return tuple(_frozen(v) for v in value) if isinstance(value, list) else value
+
+
+def _require_exact_if_used(case):
+    uses = [f"boundary.{name}" for name, edge in case.boundary.items()
+            if "exact" in (edge.ux, edge.uy, edge.traction)]
+    require(not uses or case.exact, f"{uses[0] if uses else ''} uses 'exact' but the case "
+            "has no [exact] section: add one naming the solution")
+
+
+def _efg(table):
+    _check_keys(table, _KEYS["efg"], "efg")
+    defaults = EFGSettings()
+    order = table.get("order", defaults.order)
+    require(isinstance(order, int) and order >= 1, f"efg.order = {order!r} must be an "
+            "integer >= 1")
+    settings = EFGSettings(
+        weight_u=_string(table, "weight_u", "efg", defaults.weight_u),
+        scale_u=_number(table, "scale_u", "efg", defaults.scale_u),
+        weight_p=_string(table, "weight_p", "efg", defaults.weight_p),
+        scale_p=_number(table, "scale_p", "efg", defaults.scale_p),
+        cells=_string(table, "cells", "efg", defaults.cells, CELLS),
+        order=order,
+        penalty=_number(table, "penalty", "efg", defaults.penalty),
+        correction=_string(table, "correction", "efg", defaults.correction, CORRECTIONS))
+    for key in ("scale_u", "scale_p", "penalty"):
+        require(getattr(settings, key) > 0, f"efg.{key} = {getattr(settings, key)} must be "
+                "positive")
+    return settings
 
 
 def _loading(table):
@@ -650,6 +782,7 @@ def _edges(left, right, bottom, top):
     return {"left": left, "right": right, "bottom": bottom, "top": top}
 
 
+_EXACT = {"ux": "exact", "uy": "exact"}
 _ROLLER_X = {"ux": "fixed"}
 _FIXED = {"ux": "fixed", "uy": "fixed"}
 _SHEAR = {"ux": "prescribed", "uy": "prescribed"}
@@ -719,5 +852,30 @@ _BUILTINS = {
                            {"uy": "rigid", "traction": [0.0, -1.0]}),
         "time": {"end": 1.0, "dt0": 1e-3, "growth": 1.5, "dt_max": 0.02},
         "probes": {"centre": [0.0, 0.0], "mid": [0.5, 0.0]},
+    },
+    "patch-test": {
+        "name": "patch-test",
+        "description": "Static elastic patch test: the linear field of soil.analytical "
+                       "imposed on every boundary node by penalty, unit square, 6 x 6 grid",
+        "analysis": "static",
+        "geometry": {"width": 1.0, "height": 1.0},
+        "discretisation": {"nx": 6, "ny": 6},
+        "material": {"model": "elastic", "E": 1.0, "nu": 0.3},
+        "boundary": _edges(_EXACT, _EXACT, _EXACT, _EXACT),
+        "time": {"end": 1.0, "steps": 1},
+        "exact": {"solution": "linear", "E": 1.0, "nu": 0.3},
+    },
+    "cantilever": {
+        "name": "cantilever",
+        "description": "Timoshenko cantilever 48 x 12, plane strain, E = 3e7, nu = 0.3, "
+                       "end shear P = 1000: clamped (exact) left end, parabolic shear right",
+        "analysis": "static",
+        "geometry": {"width": 48.0, "height": 12.0},
+        "discretisation": {"nx": 25, "ny": 7},
+        "material": {"model": "elastic", "E": 3e7, "nu": 0.3},
+        "boundary": _edges(_EXACT, {"traction": "exact"}, {}, {}),
+        "time": {"end": 1.0, "steps": 1},
+        "exact": {"solution": "timoshenko-beam", "E": 3e7, "nu": 0.3, "P": 1000.0,
+                  "length": 48.0, "depth": 12.0},
     },
 }

@@ -1,0 +1,137 @@
+"""Sparse assembly of EFG blocks: the pattern once per step, values scattered into it.
+
+Shape functions at integration points come as CSR matrices (points x nodes) whose value
+and derivative arrays share one pattern (:class:`efg.mls.ShapeFunctions`). A block couples
+``ft`` test fields to ``fs`` trial fields; at each integration point q its integrand is
+
+    K[(a, f), (b, g)] += sum_ij  S_a[i](q) * coeff[q, f, i, g, j] * S_b[j](q)
+
+with ``S = (phi, dphi/dx, dphi/dy)`` of the test node a and trial node b, and ``coeff``
+holding the integration weight times the material or coupling coefficients. The node-node
+pattern of a block is that of ``Phi_test^T Phi_trial`` (nodes that share a point); it is
+computed once per step and every Newton iteration scatters into it (numba kernel, no COO
+of duplicates).
+"""
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+import scipy.sparse as sp
+
+
+@dataclass(frozen=True)
+class Pattern:
+    """Node-node CSR pattern of one block and the point incidence of its two sides."""
+
+    indptr: np.ndarray
+    indices: np.ndarray
+    shape: tuple
+
+    @classmethod
+    def build(cls, test, trial):
+        """Pattern of ``test.phi^T trial.phi`` (both :class:`ShapeFunctions`-like)."""
+        a = sp.csr_matrix((np.ones_like(test.phi.data), test.phi.indices, test.phi.indptr),
+                          shape=test.phi.shape)
+        b = sp.csr_matrix((np.ones_like(trial.phi.data), trial.phi.indices,
+                           trial.phi.indptr), shape=trial.phi.shape)
+        product = (a.T @ b).tocsr()
+        product.sort_indices()
+        return cls(product.indptr.astype(np.int64), product.indices.astype(np.int64),
+                   product.shape)
+
+    @property
+    def nnz(self):
+        """Stored entries per field pair."""
+        return len(self.indices)
+
+
+def components(sf):
+    """``(3, nnz)`` array of (phi, dphi/dx, dphi/dy) values of a ShapeFunctions object."""
+    return np.stack([sf.phi.data, sf.dphi_dx.data, sf.dphi_dy.data])
+
+
+def scatter(pattern, test, trial, coeff):
+    """Assemble one block's values on its pattern.
+
+    Parameters
+    ----------
+    pattern : Pattern
+        From ``Pattern.build(test, trial)``.
+    test, trial : ShapeFunctions
+        Shape functions at the same integration points.
+    coeff : ndarray, shape (M, ft, 3, fs, 3)
+        Integrand coefficients at the M points, integration weight included.
+
+    Returns
+    -------
+    ndarray, shape (ft, fs, nnz)
+        Values of every field pair on the pattern.
+    """
+    out = np.zeros((coeff.shape[1], coeff.shape[3], pattern.nnz))
+    _scatter(pattern.indptr, pattern.indices,
+             test.phi.indptr.astype(np.int64), test.phi.indices.astype(np.int64),
+             components(test),
+             trial.phi.indptr.astype(np.int64), trial.phi.indices.astype(np.int64),
+             components(trial), np.ascontiguousarray(coeff), out)
+    return out
+
+
+@numba.njit(cache=True)
+def _scatter(p_ptr, p_idx, a_ptr, a_idx, a_val, b_ptr, b_idx, b_val, coeff, out):
+    ft, fs = coeff.shape[1], coeff.shape[3]
+    t = np.empty((ft, fs, 3))
+    for q in range(len(a_ptr) - 1):
+        for ka in range(a_ptr[q], a_ptr[q + 1]):
+            row = a_idx[ka]
+            start, stop = p_ptr[row], p_ptr[row + 1]
+            for f in range(ft):  # t = S_a . coeff[q]: the test side contracted once
+                for g in range(fs):
+                    for j in range(3):
+                        s = 0.0
+                        for i in range(3):
+                            s += a_val[i, ka] * coeff[q, f, i, g, j]
+                        t[f, g, j] = s
+            for kb in range(b_ptr[q], b_ptr[q + 1]):
+                pos = start + np.searchsorted(p_idx[start:stop], b_idx[kb])
+                for f in range(ft):
+                    for g in range(fs):
+                        out[f, g, pos] += (t[f, g, 0] * b_val[0, kb] + t[f, g, 1] * b_val[1, kb]
+                                           + t[f, g, 2] * b_val[2, kb])
+
+
+def to_matrix(pattern, values):
+    """Global CSR matrix of a block, fields blocked: rows ``f * n_test + a``.
+
+    Parameters
+    ----------
+    pattern : Pattern
+    values : ndarray, shape (ft, fs, nnz)
+    """
+    blocks = [[sp.csr_matrix((values[f, g], pattern.indices, pattern.indptr),
+                             shape=pattern.shape) for g in range(values.shape[1])]
+              for f in range(values.shape[0])]
+    return sp.bmat(blocks, format="csr")
+
+
+def elasticity_coefficients(weights, tangent):
+    """Coefficients of ``int grad(du) : C : grad(u)`` for the (ux, uy) fields.
+
+    Parameters
+    ----------
+    weights : ndarray, shape (M,)
+        Integration weights [m2 per unit thickness].
+    tangent : ndarray, shape (M, 4, 4) or (4, 4)
+        ``d sigma / d eps`` from Voigt strain ``(xx, yy, zz, 2xy)`` to stress
+        ``(xx, yy, zz, xy)``.
+
+    Returns
+    -------
+    ndarray, shape (M, 2, 3, 2, 3)
+    """
+    tangent = np.broadcast_to(tangent, (len(weights), 4, 4))
+    # B maps (field f, derivative i) to a Voigt strain component
+    B = np.zeros((2, 3, 4))
+    B[0, 1, 0] = B[1, 2, 1] = 1.0    # eps_xx = d ux/dx, eps_yy = d uy/dy
+    B[0, 2, 3] = B[1, 1, 3] = 1.0    # 2 eps_xy = d ux/dy + d uy/dx
+    return np.einsum("fik,mkl,gjl,m->mfigj", B, tangent, B, weights)

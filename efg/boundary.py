@@ -1,0 +1,114 @@
+"""Boundary integration points, penalty essential conditions and traction loads.
+
+The boundary is the closed loop of boundary nodes (counter-clockwise) in the current
+configuration; each segment between two consecutive loop nodes belongs to one edge of the
+case (left, right, bottom, top), fixed from the initial configuration. Gauss points on the
+segments carry line weights [m per unit thickness] and outward normals.
+
+Essential conditions are imposed by penalty (Zhu and Atluri 1998): for a constrained
+component f, ``alpha int_Gamma phi_a phi_b dGamma`` joins the stiffness and
+``alpha int_Gamma phi_a u_bar dGamma`` the right-hand side. ``alpha`` is a factor times the
+stiffness scale of the material divided by the nodal spacing, so it has the units of a
+stiffness per area and its size relative to the bulk stiffness is the factor itself.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from soil.problems import EDGES
+
+
+@dataclass(frozen=True)
+class BoundaryPoints:
+    """Gauss points on the boundary segments.
+
+    Attributes
+    ----------
+    points : ndarray, shape (G, 2)
+        Current coordinates [m].
+    weights : ndarray, shape (G,)
+        Line weights [m per unit thickness].
+    edge : ndarray, shape (G,)
+        Index into :data:`soil.problems.EDGES` of each point's edge.
+    normal : ndarray, shape (G, 2)
+        Unit outward normals.
+    """
+
+    points: np.ndarray
+    weights: np.ndarray
+    edge: np.ndarray
+    normal: np.ndarray
+
+
+def segment_edges(initial_nodes, loop, geometry):
+    """Edge index of each loop segment ``(loop[k], loop[k + 1])``, from initial positions.
+
+    The midpoint of a segment of the rectangle lies on exactly one of its edges.
+    """
+    a, b = initial_nodes[loop], initial_nodes[np.roll(loop, -1)]
+    mid = (a + b) / 2
+    dist = np.stack([np.abs(mid[:, 0]), np.abs(mid[:, 0] - geometry.width),
+                     np.abs(mid[:, 1]), np.abs(mid[:, 1] - geometry.height)], axis=1)
+    return np.argmin(dist, axis=1)
+
+
+def boundary_points(nodes, loop, edges, order=2):
+    """Gauss points of every boundary segment in the current configuration.
+
+    Parameters
+    ----------
+    nodes : ndarray, shape (N, 2)
+        Current node coordinates [m].
+    loop : ndarray of int
+        Boundary nodes, counter-clockwise.
+    edges : ndarray of int
+        Edge index of each segment (:func:`segment_edges`).
+    order : int
+        Gauss points per segment.
+    """
+    xi, w = np.polynomial.legendre.leggauss(order)
+    a, b = nodes[loop], nodes[np.roll(loop, -1)]
+    d = b - a
+    length = np.hypot(d[:, 0], d[:, 1])
+    points = a[:, None, :] + (0.5 * (1 + xi))[None, :, None] * d[:, None, :]
+    normal = np.stack([d[:, 1], -d[:, 0]], axis=1) / length[:, None]
+    return BoundaryPoints(points.reshape(-1, 2), (0.5 * length[:, None] * w).ravel(),
+                          np.repeat(edges, order), np.repeat(normal, order, axis=0))
+
+
+def edge_mask(bpoints, edge_names):
+    """Boolean mask of the boundary points lying on any of ``edge_names``."""
+    return np.isin(bpoints.edge, [EDGES.index(name) for name in edge_names])
+
+
+def penalty_coefficients(bpoints, constrained, alpha):
+    """Coefficients (G, 2, 3, 2, 3) of the penalty block for the displacement fields.
+
+    Parameters
+    ----------
+    bpoints : BoundaryPoints
+    constrained : ndarray of bool, shape (G, 2)
+        Whether component x / y is prescribed at each boundary point.
+    alpha : float
+        Penalty factor [stiffness per area].
+    """
+    coeff = np.zeros((len(bpoints.weights), 2, 3, 2, 3))
+    for f in range(2):  # the two displacement components
+        coeff[:, f, 0, f, 0] = alpha * bpoints.weights * constrained[:, f]
+    return coeff
+
+
+def load_vector(phi_boundary, bpoints, values, mask):
+    """``int_Gamma phi_a v_f dGamma`` on the masked points, fields blocked (2N,).
+
+    Parameters
+    ----------
+    phi_boundary : scipy.sparse matrix, shape (G, N)
+        Shape functions at the boundary points.
+    values : ndarray, shape (G, 2)
+        Traction [kPa], or penalty factor times prescribed displacement.
+    mask : ndarray of bool, shape (G, 2)
+    """
+    weighted = np.where(mask, values, 0.0) * bpoints.weights[:, None]
+    return np.concatenate([phi_boundary.T @ weighted[:, 0], phi_boundary.T @ weighted[:, 1]])

@@ -1,0 +1,161 @@
+"""Static linear elasticity with EFG (plane strain): the proving ground of the EFG core.
+
+One solve of ``(K + K_penalty) u = f_traction + f_penalty`` on the case's nodes, with the
+case's ``[efg]`` settings (weight, scale factor, background cells, Gauss order, penalty,
+gradient correction: with ``vci`` the stiffness pairs corrected test gradients with MLS
+trial gradients and is not symmetric; SuperLU solves it).
+Prescribed displacements are those of the case at ``time.end``: ``fixed`` is zero,
+``prescribed`` is ``L x t_end`` and ``exact`` comes from the case's ``[exact]`` solution,
+which also gives ``exact`` tractions and the reference for the error norms.
+
+Reported fields are interpolated, ``u^h(x_I) = sum_J phi_J(x_I) u_J``, never the nodal
+parameters ``u_J``.
+"""
+
+import time
+
+import numpy as np
+import pandas as pd
+import scipy.sparse.linalg as spla
+
+from efg import quadrature, vci
+from efg.assembly import Pattern, elasticity_coefficients, scatter, to_matrix
+from efg.boundary import (boundary_points, load_vector, penalty_coefficients,
+                          segment_edges)
+from efg.mls import ShapeFunctions
+from soil.analytical import strain_from_stress
+from soil.errors import InputError
+from soil.results import Result, Snapshot
+
+
+def background(case, nodes, loop, settings):
+    """Integration points of the case's background cells in the current configuration."""
+    if settings.cells == "squares":
+        return quadrature.square_cells(nodes[loop], case.spacing, order=settings.order)
+    return quadrature.delaunay_cells(nodes, nodes[loop], order=settings.order)
+
+
+def penalty_factor(material, case, factor):
+    """``factor x M / h``: P-wave modulus of the material over the smallest spacing."""
+    M = material.K + 4 * material.G / 3
+    return factor * M / min(case.spacing)
+
+
+def solve(case):
+    """Solve the case as static linear elasticity with EFG and return a :class:`Result`.
+
+    Raises
+    ------
+    InputError
+        If the material is not elastic.
+    """
+    material = case.material()
+    if not hasattr(material, "stiffness"):
+        raise InputError(f"case {case.name!r}: static EFG elasticity needs material.model "
+                         "= 'elastic'")
+    settings, exact = case.efg, case.exact_solution()
+    tic = time.perf_counter()
+    nodes = case.nodes()
+    loop = case.boundary_loop()
+    quad = background(case, nodes, loop, settings)
+    shape = ShapeFunctions.build(nodes, quad.points, settings.weight_u, settings.scale_u)
+    bp = boundary_points(nodes, loop, segment_edges(nodes, loop, case.geometry))
+    shape_b = ShapeFunctions.build(nodes, bp.points, settings.weight_u, settings.scale_u)
+    test = shape
+    if settings.correction == "vci":
+        test = vci.corrected(shape, quad.weights, shape_b, bp.weights, bp.normal)
+    pattern = Pattern.build(test, shape)
+    K = to_matrix(pattern, scatter(pattern, test, shape,
+                                   elasticity_coefficients(quad.weights, material.stiffness)))
+    constrained, u_bar, traction, loaded = boundary_data(case, bp, exact)
+    alpha = penalty_factor(material, case, settings.penalty)
+    pattern_b = Pattern.build(shape_b, shape_b)
+    K_pen = to_matrix(pattern_b, scatter(pattern_b, shape_b, shape_b,
+                                         penalty_coefficients(bp, constrained, alpha)))
+    rhs = (load_vector(shape_b.phi, bp, traction, loaded)
+           + load_vector(shape_b.phi, bp, alpha * u_bar, constrained))
+    coefficients = spla.spsolve((K + K_pen).tocsc(), rhs)
+    wall = time.perf_counter() - tic
+
+    n = len(nodes)
+    at_nodes = ShapeFunctions.build(nodes, nodes, settings.weight_u, settings.scale_u)
+    u_nodes = _interpolate(at_nodes, coefficients, n)
+    stress_nodes = _strain(at_nodes, coefficients, n) @ material.stiffness.T
+    errors = error_norms(shape, quad.weights, coefficients, material, exact, quad.points,
+                         at_nodes, u_nodes, nodes) if exact else {}
+    summary = {"steps": 1, "dofs": 2 * n, "integration_points": len(quad.weights),
+               "penalty_alpha": alpha, "timings": {"solve_s": wall}, "errors": errors}
+    history = pd.DataFrame([{"time": case.times()[-1], **errors}])
+    snapshot = Snapshot(case.times()[-1], nodes + u_nodes,
+                        {"u": u_nodes, "stress": stress_nodes,
+                         "support_radius": at_nodes.support})
+    return Result(case, "efg", settings.to_dict(), history, [snapshot], summary)
+
+
+def boundary_data(case, bp, exact):
+    """Constrained components, prescribed values, tractions and loaded components at bp.
+
+    Returns four (G, 2) arrays: bool constrained, prescribed displacement, traction
+    [stress unit], bool loaded (free components with a traction).
+    """
+    t_end = case.times()[-1]
+    G = len(bp.weights)
+    constrained = np.zeros((G, 2), bool)
+    loaded = np.zeros((G, 2), bool)
+    u_bar = np.zeros((G, 2))
+    traction = np.zeros((G, 2))
+    u_exact, s_exact = exact(bp.points) if exact else (None, None)
+    for k, (name, edge) in enumerate(case.boundary.items()):
+        on = bp.edge == k
+        for f, kind in enumerate((edge.ux, edge.uy)):
+            if kind == "prescribed":
+                u_bar[on, f] = (bp.points[on] @ case.loading.L.T)[:, f] * t_end
+            elif kind == "exact":
+                u_bar[on, f] = u_exact[on, f]
+            constrained[on, f] = kind in ("fixed", "prescribed", "exact")
+            loaded[on, f] = kind == "free"
+        if edge.traction == "exact":
+            n = bp.normal[on]
+            sx, sy, sxy = s_exact[on, 0], s_exact[on, 1], s_exact[on, 3]
+            traction[on] = np.stack([sx * n[:, 0] + sxy * n[:, 1],
+                                     sxy * n[:, 0] + sy * n[:, 1]], axis=1)
+        else:
+            traction[on] = np.asarray(edge.traction) * case.loading.factor(t_end)
+    return constrained, u_bar, traction, loaded
+
+
+def _interpolate(shape, coefficients, n):
+    """``u^h`` at the shape functions' points, (P, 2)."""
+    return np.stack([shape.phi @ coefficients[:n], shape.phi @ coefficients[n:]], axis=1)
+
+
+def _strain(shape, coefficients, n):
+    """Voigt strain ``(xx, yy, zz, 2xy)`` at the shape functions' points, (P, 4)."""
+    ux, uy = coefficients[:n], coefficients[n:]
+    exx, eyy = shape.dphi_dx @ ux, shape.dphi_dy @ uy
+    return np.stack([exx, eyy, 0 * exx, shape.dphi_dy @ ux + shape.dphi_dx @ uy], axis=1)
+
+
+def error_norms(shape, weights, coefficients, material, exact, points, at_nodes, u_nodes,
+                nodes):
+    """Relative errors against the exact solution.
+
+    ``displacement``: max |u^h - u| at the nodes over max |u|; ``stress``: max over the
+    integration points of |sigma^h - sigma| over max |sigma|; ``energy``: the energy norm
+    ``sqrt(int (eps^h - eps) : C : (eps^h - eps))`` over that of the exact solution.
+    """
+    n = len(nodes)
+    u_ex, _ = exact(nodes)
+    _, s_ex = exact(points)
+    C = material.stiffness
+    eps_h = _strain(shape, coefficients, n)
+    eps_ex = strain_from_stress(s_ex, material.E, material.nu)
+    de = eps_h - eps_ex
+    energy = np.sqrt(np.sum(weights * np.einsum("pi,ij,pj->p", de, C, de))
+                     / np.sum(weights * np.einsum("pi,ij,pj->p", eps_ex, C, eps_ex)))
+    s_h = eps_h @ C.T
+    return {
+        "displacement": float(np.abs(u_nodes - u_ex).max() / np.abs(u_ex).max()),
+        "stress": float(np.abs(s_h - s_ex).max() / np.abs(s_ex).max()),
+        "energy": float(energy),
+    }
