@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: test report clean
+.PHONY: test report bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -17,6 +17,9 @@ test: $(STAMP)
 
 report: $(STAMP)
 	$(BIN)/soilwater report
+
+bench: $(STAMP)
+	$(BIN)/soilwater bench
 
 clean:
 	rm -rf $(VENV) .pytest_cache .hypothesis

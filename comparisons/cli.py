@@ -1,4 +1,4 @@
-"""The ``soilwater`` command: ``list``, ``show``, ``run``, ``path`` and ``report``.
+"""The ``soilwater`` command: ``list``, ``show``, ``run``, ``path``, ``report``, ``bench``.
 
 Errors the user can fix (bad input, a run that cannot converge) print one line,
 ``soilwater: error: ...``, and exit with status 2; nothing is written.
@@ -67,6 +67,11 @@ def _parser():
     p.add_argument("--out", required=True, help="CSV file: step, eps_a, eps_v, p, q, pc")
     p.set_defaults(func=_path)
 
+    p = sub.add_parser("bench", help="speed ratios against scikit-fem (writes "
+                       "reports/bench.md)")
+    p.add_argument("--out", default="reports/bench.md", help="Markdown table")
+    p.set_defaults(func=_bench)
+
     p = sub.add_parser("report", help="regenerate every figure and table under reports/")
     p.add_argument("--out", default="reports", help="report folder (default reports)")
     p.set_defaults(func=_report)
@@ -134,6 +139,12 @@ def _path(args):
     table = run_test(material, args.test, args.strain, points=args.points)
     write_csv(table, args.out)
     print(f"wrote {args.out} ({len(table)} rows)")
+
+
+def _bench(args):
+    from comparisons.bench import run
+
+    run(args.out)
 
 
 def _report(args):

@@ -163,3 +163,26 @@ def shape_functions(path, scale=1.3):
     fig.savefig(path, dpi=150)
     plt.close(fig)
     return path
+
+
+def efg_convergence(table, path):
+    """Energy-norm error of the cantilever against nodal spacing, log-log, per weight/cells.
+
+    ``table`` is :func:`comparisons.verification.cantilever_convergence`.
+    """
+    fig, ax = plt.subplots(figsize=(6.4, 4.6), constrained_layout=True)
+    styles = {"delaunay": "-", "squares": "--"}
+    colours = {"Q": "C0", "E-A": "C1", "E-B": "C2"}
+    for (weight, cells), group in table.groupby(["weight", "cells"], sort=False):
+        ax.loglog(group.h, group.energy, styles[cells], marker="o", color=colours[weight],
+                  label=f"{weight}, {cells} cells")
+    h = np.array([table.h.min(), table.h.max()])
+    e = table.energy.min() * (h / h[0])
+    ax.loglog(h, e, "k:", lw=1, label="slope 1")
+    ax.set(xlabel="nodal spacing h (m), beam 48 x 12", ylabel="relative energy-norm error",
+           title="EFG cantilever (Timoshenko beam), plane strain, VCI")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8, ncol=2)
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path

@@ -4,7 +4,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from comparisons import figures, peers, tables
+from comparisons import figures, peers, tables, verification
 
 
 def make_report(root="reports"):
@@ -23,6 +23,9 @@ def make_report(root="reports"):
          lambda: [figures.shape_functions(root / "figures" / "shape_functions.png")]),
         ("background cells (Figs. 3, 5)",
          lambda: [figures.background_cells(root / "figures" / "cells.png")]),
+        ("patch test", lambda: tables.write(verification.patch_test(),
+                                            root / "tables" / "patch_test")),
+        ("cantilever convergence", lambda: _convergence(root)),
         ("stress paths (driver)",
          lambda: [figures.stress_paths_driver(root / "figures" / "stress_paths_driver.png")]),
     ]
@@ -31,3 +34,10 @@ def make_report(root="reports"):
         bar.set_postfix_str(name)
         written += list(task())
     return written
+
+
+def _convergence(root):
+    table = verification.cantilever_convergence(corrections=("vci", "none"))
+    vci = table[table.correction == "vci"]
+    return [*tables.write(table, root / "tables" / "efg_convergence"),
+            figures.efg_convergence(vci, root / "figures" / "efg_convergence.png")]

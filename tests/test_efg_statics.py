@@ -1,0 +1,77 @@
+"""Static EFG elasticity: assembly, patch test, cantilever convergence, bad supports."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from comparisons.cli import main
+from comparisons.verification import cantilever_convergence, patch_test
+from efg.assembly import Pattern, elasticity_coefficients, scatter, to_matrix
+from efg.mls import ShapeFunctions
+from soil.analytical import plane_strain_stiffness
+
+
+def test_scatter_equals_sparse_products():
+    """The numba scatter gives the same stiffness as explicit sparse products."""
+    rng = np.random.default_rng(3)
+    x = np.linspace(0, 1, 7)
+    nodes = np.stack(np.meshgrid(x, x), -1).reshape(-1, 2)
+    points = rng.uniform(0, 1, (200, 2))
+    w = rng.uniform(0.5, 1.5, 200)
+    sf = ShapeFunctions.build(nodes, points)
+    C = plane_strain_stiffness(2.0, 0.3)
+    pattern = Pattern.build(sf, sf)
+    K = to_matrix(pattern, scatter(pattern, sf, sf, elasticity_coefficients(w, C)))
+    dx, dy = sp.csr_matrix(sf.dphi_dx), sp.csr_matrix(sf.dphi_dy)
+    zero = sp.csr_matrix(dx.shape)
+    B = sp.bmat([[dx, zero], [zero, dy], [zero, zero], [dy, dx]])  # Voigt rows, blocked dofs
+    reference = (B.T @ sp.kron(sp.csr_matrix(C), sp.diags(w)) @ B).toarray()
+    assert np.abs(K.toarray() - reference).max() < 1e-12 * np.abs(reference).max()
+
+
+def test_patch_test_passes_with_the_default_settings():
+    """Delaunay cells at the default Gauss order: errors below 1e-3 (vci, the default)."""
+    table = patch_test()
+    default = table[(table.cells == "delaunay") & (table.correction == "vci")].iloc[0]
+    assert default.order == 2
+    assert default.displacement < 1e-3 and default.stress < 1e-3
+    # without the correction, the integration error of plain Gauss quadrature shows
+    plain = table[(table.cells == "delaunay") & (table.correction == "none")].iloc[0]
+    assert plain.stress > 10 * default.stress
+
+
+def test_cantilever_converges_in_the_energy_norm():
+    table = cantilever_convergence(levels=((13, 4), (25, 7), (49, 13)), cells=("delaunay",),
+                                   weights={"Q": "quartic"})
+    assert table.energy.is_monotonic_decreasing
+    assert table.rate.dropna().min() >= 0.8
+    assert table.energy.iloc[-1] < 0.05
+
+
+def test_too_small_supports_stop_the_run_and_write_nothing(tmp_path, capsys):
+    out = tmp_path / "run"
+    status = main(["run", "patch-test", "--method", "efg", "--out", str(out),
+                   "--set", "efg.scale_u=0.7", "--set", "efg.cells=squares",
+                   "--set", "efg.order=3", "--set", "discretisation.nx=7",
+                   "--set", "discretisation.ny=9"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 2 and len(err) == 1
+    assert "scale" in err[0] and "increase the scale factor" in err[0]
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_run_writes_a_readable_result(tmp_path):
+    import json
+
+    import meshio
+    import pandas as pd
+
+    out = tmp_path / "cantilever"
+    assert main(["run", "cantilever", "--method", "efg", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["method"] == "efg" and summary["penalty_alpha"] > 0
+    assert summary["options"]["cells"] == "delaunay"
+    assert pd.read_csv(out / "history.csv").energy.iloc[0] < 0.15
+    mesh = meshio.read(out / "fields_0000.vtu")
+    assert len(mesh.points) == 25 * 7 and mesh.point_data["u"].shape == (175, 2)
+    assert "fields_0000.vtu" in (out / "fields.pvd").read_text()
