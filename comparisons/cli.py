@@ -36,20 +36,16 @@ def _parser():
     p = sub.add_parser("show", help="validate a case and print its resolved definition",
                        description="Load a built-in case or a TOML file, apply --set "
                        "overrides, validate everything and print the case as JSON.")
-    p.add_argument("case", help="built-in case name or TOML file")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="override an entry, e.g. material.permeability=1e-6 (repeatable)")
+    _case_arguments(p)
     p.set_defaults(func=_show)
 
     p = sub.add_parser("run", help="run a case with a method and write its result folder",
                        description="Solve a case (built-in name or TOML file) and write "
                        "DIR/summary.json, DIR/history.csv and DIR/fields.pvd with VTU files. "
                        "DIR is replaced only when the run succeeds.")
-    p.add_argument("case", help="built-in case name or TOML file")
+    _case_arguments(p)
     p.add_argument("--method", required=True, choices=list(METHODS), help="solver")
     p.add_argument("--out", required=True, metavar="DIR", help="result folder")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a case entry, e.g. efg.cells=squares (repeatable)")
     p.set_defaults(func=_run)
 
     p = sub.add_parser("path", help="stress-point driver: a material under a named test",
@@ -76,6 +72,14 @@ def _parser():
     p.add_argument("--out", default="reports", help="report folder (default reports)")
     p.set_defaults(func=_report)
     return parser
+
+
+def _case_arguments(p):
+    """The case and its ``--set`` overrides, shared by ``show`` and ``run``."""
+    p.add_argument("case", help="built-in case name or TOML file")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a case entry, e.g. material.permeability=1e-6 or "
+                   "efg.cells=squares (repeatable)")
 
 
 def _list(args):
