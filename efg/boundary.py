@@ -16,8 +16,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from soil.problems import EDGES
-
 
 @dataclass(frozen=True)
 class BoundaryPoints:
@@ -30,7 +28,7 @@ class BoundaryPoints:
     weights : ndarray, shape (G,)
         Line weights [m per unit thickness].
     edge : ndarray, shape (G,)
-        Index into :data:`soil.problems.EDGES` of each point's edge.
+        Index into ``soil.problems.EDGES`` of each point's edge.
     normal : ndarray, shape (G, 2)
         Unit outward normals.
     """
@@ -77,9 +75,48 @@ def boundary_points(nodes, loop, edges, order=2):
                           np.repeat(edges, order), np.repeat(normal, order, axis=0))
 
 
-def edge_mask(bpoints, edge_names):
-    """Boolean mask of the boundary points lying on any of ``edge_names``."""
-    return np.isin(bpoints.edge, [EDGES.index(name) for name in edge_names])
+@dataclass(frozen=True)
+class Conditions:
+    """Kinds of condition at each boundary point, from the case's edges.
+
+    Attributes
+    ----------
+    kind : ndarray of str, shape (G, 2)
+        ``free``, ``fixed``, ``prescribed``, ``exact`` or ``rigid`` per component.
+    traction : ndarray, shape (G, 2)
+        The edge's traction [stress unit] (zero where ``exact``; see ``exact_traction``).
+    exact_traction : ndarray of bool, shape (G,)
+        Whether the edge takes its traction from the case's exact solution.
+    drained : ndarray of bool, shape (G,)
+        Whether p_w = 0 is imposed.
+    """
+
+    kind: np.ndarray
+    traction: np.ndarray
+    exact_traction: np.ndarray
+    drained: np.ndarray
+
+    @property
+    def constrained(self):
+        """(G, 2) bool: components whose displacement is imposed by penalty."""
+        return np.isin(self.kind, ("fixed", "prescribed", "exact"))
+
+    @property
+    def loaded(self):
+        """(G, 2) bool: components that carry a traction."""
+        return np.isin(self.kind, ("free", "rigid"))
+
+
+def conditions(case, bpoints):
+    """The case's boundary conditions at the boundary points (vectorised over edges)."""
+    edges = [edge for _, edge in case.boundary.items()]
+    pick = bpoints.edge
+    kind = np.array([[e.ux, e.uy] for e in edges])[pick]
+    exact = np.array([e.traction == "exact" for e in edges])
+    traction = np.array([(0.0, 0.0) if e.traction == "exact" else e.traction
+                         for e in edges])[pick]
+    drained = np.array([e.drained for e in edges])[pick]
+    return Conditions(kind, traction, exact[pick], drained)
 
 
 def penalty_coefficients(bpoints, constrained, alpha):

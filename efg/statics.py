@@ -20,7 +20,7 @@ import scipy.sparse.linalg as spla
 
 from efg import quadrature, vci
 from efg.assembly import Pattern, elasticity_coefficients, scatter, to_matrix
-from efg.boundary import (boundary_points, load_vector, penalty_coefficients,
+from efg.boundary import (boundary_points, conditions, load_vector, penalty_coefficients,
                           segment_edges)
 from efg.mls import ShapeFunctions
 from soil.analytical import strain_from_stress
@@ -95,33 +95,26 @@ def solve(case):
 def boundary_data(case, bp, exact):
     """Constrained components, prescribed values, tractions and loaded components at bp.
 
-    Returns four (G, 2) arrays: bool constrained, prescribed displacement, traction
-    [stress unit], bool loaded (free components with a traction).
+    Returns four (G, 2) arrays: bool constrained, prescribed displacement at ``time.end``,
+    traction [stress unit], bool loaded (components that carry a traction).
     """
     t_end = case.times()[-1]
-    G = len(bp.weights)
-    constrained = np.zeros((G, 2), bool)
-    loaded = np.zeros((G, 2), bool)
-    u_bar = np.zeros((G, 2))
-    traction = np.zeros((G, 2))
-    u_exact, s_exact = exact(bp.points) if exact else (None, None)
-    for k, (name, edge) in enumerate(case.boundary.items()):
-        on = bp.edge == k
-        for f, kind in enumerate((edge.ux, edge.uy)):
-            if kind == "prescribed":
-                u_bar[on, f] = (bp.points[on] @ case.loading.L.T)[:, f] * t_end
-            elif kind == "exact":
-                u_bar[on, f] = u_exact[on, f]
-            constrained[on, f] = kind in ("fixed", "prescribed", "exact")
-            loaded[on, f] = kind == "free"
-        if edge.traction == "exact":
-            n = bp.normal[on]
-            sx, sy, sxy = s_exact[on, 0], s_exact[on, 1], s_exact[on, 3]
-            traction[on] = np.stack([sx * n[:, 0] + sxy * n[:, 1],
-                                     sxy * n[:, 0] + sy * n[:, 1]], axis=1)
-        else:
-            traction[on] = np.asarray(edge.traction) * case.loading.factor(t_end)
-    return constrained, u_bar, traction, loaded
+    bc = conditions(case, bp)
+    u_bar = np.zeros_like(bc.traction)
+    prescribed = bc.kind == "prescribed"
+    u_bar[prescribed] = (bp.points @ case.loading.L.T * t_end)[prescribed]
+    traction = bc.traction * case.loading.factor(t_end)
+    if exact is not None:
+        u_exact, s_exact = exact(bp.points)
+        u_bar[bc.kind == "exact"] = u_exact[bc.kind == "exact"]
+        traction[bc.exact_traction] = cauchy_traction(s_exact, bp.normal)[bc.exact_traction]
+    return bc.constrained, u_bar, traction, bc.loaded
+
+
+def cauchy_traction(stress, normal):
+    """``sigma n`` (G, 2) of stress-like vectors (G, 4) on unit normals (G, 2)."""
+    return np.stack([stress[:, 0] * normal[:, 0] + stress[:, 3] * normal[:, 1],
+                     stress[:, 3] * normal[:, 0] + stress[:, 1] * normal[:, 1]], axis=1)
 
 
 def _interpolate(shape, coefficients, n):
