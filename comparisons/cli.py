@@ -111,11 +111,10 @@ def _run(args):
 
 
 def _efg(case):
-    if case.analysis != "static":
-        raise SoilwaterError(f"case {case.name!r}: method efg runs static cases "
-                             "(analysis = 'static') so far; the coupled u-p solver is next")
-    from efg.statics import solve
-
+    if case.analysis == "static":
+        from efg.statics import solve
+    else:
+        from efg.solver import solve
     return solve(case)
 
 

@@ -103,8 +103,14 @@ class Conditions:
 
     @property
     def loaded(self):
-        """(G, 2) bool: components that carry a traction."""
-        return np.isin(self.kind, ("free", "rigid"))
+        """(G, 2) bool: components that carry the edge's traction (rigid ones pass it to
+        the plate)."""
+        return self.kind == "free"
+
+    @property
+    def rigid(self):
+        """(G,) bool: points whose uy follows the rigid plate."""
+        return self.kind[:, 1] == "rigid"
 
 
 def conditions(case, bpoints):

@@ -83,3 +83,85 @@ def exact_solution(name, **parameters):
         return SOLUTIONS[name](np.asarray(points, dtype=float), **parameters)
 
     return field
+
+
+def terzaghi(z, t, load, height, modulus, alpha, storage, mobility, terms=200):
+    """Terzaghi consolidation of a column drained at the top (z measured from the base).
+
+    Parameters
+    ----------
+    z : array_like
+        Heights above the impermeable base [m].
+    t : float
+        Time since the step load [s] (> 0).
+    load : float
+        Compressive load on the top (> 0) [stress unit].
+    height : float
+        Column height h [m].
+    modulus : float
+        Constrained (oedometric) modulus ``1/m_v = K + 4G/3``.
+    alpha, storage : float
+        Biot coefficient and storage S = 1/M.
+    mobility : float
+        ``k / gamma_w``.
+
+    Returns
+    -------
+    p : ndarray
+        Pore pressure (compression positive) at z.
+    settlement : float
+        Downward displacement of the top (positive).
+    """
+    mv = 1.0 / modulus
+    cv = mobility / (storage + alpha**2 * mv)
+    p0 = alpha * mv * load / (storage + alpha**2 * mv)
+    k = np.arange(1, terms + 1)[:, None]
+    m = (2 * k - 1) * np.pi / (2 * height)
+    decay = np.exp(-(m**2) * cv * t)
+    z = np.atleast_1d(np.asarray(z, dtype=float))[None, :]
+    p = 4 * p0 / np.pi * np.sum((-1.0) ** (k - 1) / (2 * k - 1) * np.cos(m * z) * decay, 0)
+    U = 1 - 8 / np.pi**2 * np.sum(decay[:, 0] / (2 * k[:, 0] - 1) ** 2)
+    u0 = load * mv * height * storage / (storage + alpha**2 * mv)
+    u_inf = load * mv * height
+    return p, u0 + U * (u_inf - u0)
+
+
+def mandel(x, t, force, a, G, nu, mobility, terms=100):
+    """Mandel's problem: pore pressure under a rigid frictionless plate, plane strain.
+
+    Incompressible constituents (Biot alpha = 1, S = 0, so B = 1 and nu_u = 1/2); a
+    specimen ``2a`` wide, drained at ``x = +-a``; ``force`` is the compressive force on
+    the plate per unit thickness over the half-width ``a``.
+
+    Parameters
+    ----------
+    x : array_like
+        Distance from the centre line [m].
+    t : float
+        Time since loading [s] (> 0).
+
+    Returns
+    -------
+    ndarray
+        Pore pressure (compression positive); at ``t = 0+`` it is ``force/(2a)``
+        everywhere, and at the centre it first rises above that (Mandel-Cryer effect).
+    """
+    nu_u = 0.5
+    c = mobility * 2 * G * (1 - nu) / (1 - 2 * nu)
+    roots = mandel_roots((1 - nu) / (nu_u - nu), terms)[:, None]
+    x = np.atleast_1d(np.asarray(x, dtype=float))[None, :]
+    series = (np.sin(roots) / (roots - np.sin(roots) * np.cos(roots))
+              * (np.cos(roots * x / a) - np.cos(roots)) * np.exp(-roots**2 * c * t / a**2))
+    return 2 * force * (1 + nu_u) / (3 * a) * series.sum(axis=0)
+
+
+def mandel_roots(ratio, terms):
+    """The first positive roots of ``tan(r) = ratio r`` (one in each branch of tan)."""
+    from scipy.optimize import brentq
+
+    def f(r):
+        return np.sin(r) - ratio * r * np.cos(r)
+
+    eps = 1e-12
+    return np.array([brentq(f, k * np.pi + eps, k * np.pi + np.pi / 2 - eps)
+                     if k else brentq(f, eps * 1e3, np.pi / 2 - eps) for k in range(terms)])

@@ -1,0 +1,511 @@
+"""Updated-Lagrangian u-p EFG solver: Biot consolidation with finite-strain Cam-clay.
+
+Every node carries a displacement and a pore pressure parameter; displacement and pore
+pressure each have their own MLS weight and scale factor (``[efg]`` of the case). A step
+from t_n to t_(n+1) is solved on the configuration x_n (shape functions and background
+cells rebuilt there) for the displacement increment ``du`` and ``p_w`` at t_(n+1):
+
+* equilibrium on the current configuration, ``int grad(dv) : sigma dOmega_(n+1) = ext``,
+  ``sigma = sigma' - alpha p_w I`` (tension positive stress, p_w compression positive);
+  with ``F = I + grad_n(du)`` it reads ``int grad_n(dv) . J sigma F^-T dOmega_n``;
+* continuity, backward Euler (compression positive p_w, Darcy flux
+  ``-(k/gamma_w) grad p_w``):
+  ``int dp [alpha (J - 1) + S (p - p_n)] dOmega_n + dt int grad(dp) . (k/gamma_w)
+  grad(p) dOmega_n = 0`` (drained edges by penalty);
+* the stress increment from the material's return mapping with the midpoint stretching
+  ``sym(grad_n(du) F_(1/2)^-1)`` (its volumetric part set to ``ln J`` so that the specific
+  volume follows the volume exactly) and the Hughes-Winget spin.
+
+Newton's method linearises ``J sigma F^-T``: the material's consistent tangent, the
+rotation of the effective stress by the spin and the change of area and orientation
+(:func:`_spatial_tangent`); the only approximation is that the spin's rotation acts on
+sigma' at t_(n+1) rather than on the rotated start-of-step stress, a difference of the
+order of the strain increment. A step converges when the displacement residual is
+below ``TOLERANCE`` times the force scale (stress scale x nodal spacing) and the continuity
+residual below ``TOLERANCE`` times the volume scale (area x stress scale / P-wave modulus).
+A step that does not converge, inverts a background cell or fails in the material is cut
+back (halved) up to ``MAX_CUTS`` times before the run stops with one clear error.
+
+Material state lives on the nodes (the material points): at the start of a step the
+integration points take stress and state from the nodes by MLS interpolation, and after a
+converged step the nodes update their own state with the nodal stretching ``D^I`` (the one
+that enters ERR, paper eq. 1) and move by ``u^h(x_I)``.
+
+Essential conditions are penalties on total quantities: each boundary Gauss point keeps
+the gap ``u^h - u_bar`` of its constrained components, so reactions carried in earlier
+steps are not lost. A rigid plate (Mandel) adds one unknown, its settlement; its total
+force equals the edge load. When no boundary is drained or free and the constituents are
+incompressible, the pore pressure is defined up to a constant: the mean change of p_w over
+the domain is then pinned to zero by one Lagrange multiplier.
+"""
+
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+import pandas as pd
+import scipy.linalg
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from tqdm import tqdm
+
+from efg import vci
+from efg.assembly import Pattern, scatter, to_matrix
+from efg.boundary import (boundary_points, conditions, penalty_coefficients,
+                          segment_edges)
+from efg.mls import ShapeFunctions
+from efg.statics import background, cauchy_traction
+from soil.errors import ConvergenceError
+from soil.kinematics import IDENTITY, invariants
+from soil.results import Result, Snapshot
+
+TOLERANCE = 1e-8
+MAX_ITERATIONS = 25
+MAX_CUTS = 6
+
+#: Voigt strain component of (displacement field f, spatial derivative k).
+_B = np.zeros((2, 2, 4))
+_B[0, 0, 0] = _B[1, 1, 1] = _B[0, 1, 3] = _B[1, 0, 3] = 1.0
+
+
+@dataclass
+class Points:
+    """The material points (nodes) and everything that is carried from step to step."""
+
+    nodes: np.ndarray        # (N, 2) current coordinates [m]
+    stress: np.ndarray       # (N, 4) effective stress, tension positive
+    state: dict              # material state at the nodes
+    p: np.ndarray            # (N,) pore pressure parameters, compression positive
+    gap: np.ndarray          # (G, 2) u^h - u_bar at boundary points (constrained parts)
+    plate: float             # rigid-plate settlement (uy, m)
+    plate_gap: np.ndarray    # (G,) u_y^h - plate at the plate's points
+    probes: np.ndarray       # (P, 2) current probe positions
+    stretching: np.ndarray   # (N, 4) nodal stretching D^I of the last step [1/s]
+
+
+@dataclass
+class Model:
+    """What stays fixed over a run: case, material, settings, boundary topology, scales."""
+
+    case: object
+    material: object
+    loop: np.ndarray
+    edges: np.ndarray
+    sigma0: np.ndarray       # (4,) initial total stress
+    h: float
+    stress_scale: float
+    modulus: float           # P-wave modulus at the initial state
+    pin_pressure: bool
+
+    @classmethod
+    def build(cls, case):
+        material = case.material()
+        nodes = case.nodes()
+        loop = case.boundary_loop()
+        stress, state = material.initial_state(1)
+        K, G = (material.moduli(-stress[0, :3].mean(), state["v"][0])
+                if hasattr(material, "moduli") else (material.K, material.G))
+        sigma0 = stress[0] - case.fluid.biot_alpha * case.initial_pore_pressure * IDENTITY
+        edges = [edge for _, edge in case.boundary.items()]
+        tractions = [abs(np.asarray(e.traction, float)).max() for e in edges
+                     if e.traction != "exact"]
+        scale = max([abs(stress[0]).max(), *tractions, 1e-12])
+        free = any("free" in (e.ux, e.uy) or "rigid" in (e.ux, e.uy) for e in edges)
+        pin = (case.fluid.storage == 0 and not free and not any(e.drained for e in edges))
+        return cls(case, material, loop, segment_edges(nodes, loop, case.geometry),
+                   sigma0, float(min(case.spacing)), scale, float(K + 4 * G / 3), pin)
+
+
+def solve(case, progress=True):
+    """Run a coupled case with EFG and return its :class:`~soil.results.Result`.
+
+    Parameters
+    ----------
+    case : Case
+        ``analysis = "coupled"``; Cam-clay or linear elastic skeleton.
+    progress : bool
+        Show a progress bar on the terminal.
+
+    Raises
+    ------
+    ConvergenceError
+        A step that still fails after ``MAX_CUTS`` halvings (the message names the time).
+    InputError
+        Bad supports (too small a scale factor) and other invalid settings.
+    """
+    model = Model.build(case)
+    points = _initial_points(model)
+    times = case.times()
+    rows, snapshots = [], [_snapshot(model, points, 0.0)]
+    stats = {"newton_iterations": 0, "cutbacks": 0, "max_residual": 0.0,
+             "timings": {"shape_functions_s": 0.0, "assembly_s": 0.0, "solve_s": 0.0,
+                         "material_s": 0.0}}
+    tic = time.perf_counter()
+    for t0, t1 in tqdm(list(zip(times[:-1], times[1:])), desc=f"efg {case.name}",
+                       unit="step", disable=not progress or None, leave=False):
+        points, info = _advance(model, points, t0, t1, stats)
+        rows.append(_history_row(model, points, t1, t1 - t0, info))
+        snapshots.append(_snapshot(model, points, t1))
+    stats["timings"]["total_s"] = time.perf_counter() - tic
+    history = pd.DataFrame(rows)
+    if history["err"].isna().all():
+        history["err"] = None
+    summary = {"steps": len(times) - 1, "dofs": 3 * len(points.nodes),
+               "tolerance": TOLERANCE, **stats, **_penalties(model, times)}
+    return Result(case, "efg", case.efg.to_dict(), history, snapshots, summary)
+
+
+def _initial_points(model):
+    case = model.case
+    nodes = case.nodes()
+    stress, state = model.material.initial_state(len(nodes))
+    n_bp = len(model.loop) * 2
+    return Points(nodes=nodes, stress=stress, state=state,
+                  p=np.full(len(nodes), case.initial_pore_pressure),
+                  gap=np.zeros((n_bp, 2)), plate=0.0, plate_gap=np.zeros(n_bp),
+                  probes=np.array([p.point for p in case.probes]).reshape(-1, 2),
+                  stretching=np.zeros((len(nodes), 4)))
+
+
+def _advance(model, points, t0, t1, stats):
+    """One time level, cut back (halved) while it fails."""
+    dt = t1 - t0
+    for cut in range(MAX_CUTS + 1):
+        try:
+            t, current, iterations, residuals = t0, points, 0, []
+            for _ in range(2**cut):
+                current, its, res = _step(model, current, t, t + dt / 2**cut, stats)
+                t += dt / 2**cut
+                iterations += its
+                residuals.append(res)
+            stats["cutbacks"] += cut
+            stats["newton_iterations"] += iterations
+            stats["max_residual"] = max(stats["max_residual"], *residuals)
+            return current, {"iterations": iterations, "residual": max(residuals),
+                             "substeps": 2**cut}
+        except (ConvergenceError, FloatingPointError) as err:
+            reason = err
+    raise ConvergenceError(f"step t = {t0:g} -> {t1:g} s failed after {MAX_CUTS} halvings "
+                           f"of the time step ({reason}): reduce time steps or loading "
+                           "rate, or check the boundary conditions")
+
+
+def _step(model, points, t0, t1, stats):
+    """Newton iterations for one step; returns the new points, iterations, residual."""
+    case, settings = model.case, model.case.efg
+    dt = t1 - t0
+    tic = time.perf_counter()
+    disc = _discretise(model, points.nodes, np.vstack([points.nodes, points.probes]))
+    stats["timings"]["shape_functions_s"] += time.perf_counter() - tic
+    n, M = len(points.nodes), len(disc.w)
+    su = disc.su
+    stress_q = su.phi @ points.stress
+    state_q = {k: su.phi @ v for k, v in points.state.items()}
+    p_n_q = disc.sp.phi @ points.p
+    bc = disc.bc
+    du_bar = _prescribed_increment(case, disc.bp.points, dt)
+    alpha_u, alpha_p = _penalties(model, [0.0, dt]).values()
+    fluid = case.fluid
+    traction = (cauchy_traction(np.broadcast_to(model.sigma0, (len(disc.bp.weights), 4)),
+                                disc.bp.normal)
+                + bc.traction * bc.loaded * case.loading.factor(t1))
+    plate_force = _plate_force(case, t1)
+
+    du, p, plate = np.zeros(2 * n), points.p.copy(), points.plate
+    lam = 0.0
+    for iteration in range(1, MAX_ITERATIONS + 1):
+        H = _gradient(su, du, n)
+        F = np.eye(2) + H
+        J = np.linalg.det(F)
+        if not np.all(J > 0):
+            raise ConvergenceError(f"a background cell inverts (J = {J.min():.3g})")
+        Finv = np.linalg.inv(F)
+        deps, dw = _strain_increment(H, J)
+        tic = time.perf_counter()
+        stress, state, tangent = model.material.update(stress_q, state_q, deps, dw)
+        stats["timings"]["material_s"] += time.perf_counter() - tic
+        p_q = disc.sp.phi @ p
+        total = stress - fluid.biot_alpha * p_q[:, None] * IDENTITY
+        wJ = disc.w * J
+
+        # residuals
+        sig = _in_plane(total)                                               # (M, 2, 2)
+        P = wJ[:, None, None] * sig @ np.swapaxes(Finv, 1, 2)               # (M, f, i)
+        tu, tp = disc.tu, disc.tp
+        R_u = np.concatenate([tu.dphi_dx.T @ P[:, f, 0] + tu.dphi_dy.T @ P[:, f, 1]
+                              for f in range(2)])
+        ub = disc.sub.phi @ du.reshape(2, n).T                              # (G, 2)
+        gap = points.gap + ub - du_bar
+        R_u += np.concatenate([disc.sub.phi.T @ (alpha_u * disc.bp.weights
+                                                  * bc.constrained[:, f] * gap[:, f])
+                               for f in range(2)])
+        plate_gap = points.plate_gap + ub[:, 1] - (plate - points.plate)
+        rigid_w = alpha_u * disc.bp.weights * bc.rigid
+        R_u[n:] += disc.sub.phi.T @ (rigid_w * plate_gap)
+        R_u -= np.concatenate([disc.sub.phi.T @ (disc.bp.weights * traction[:, f])
+                               for f in range(2)])
+        grad_p = np.stack([disc.sp.dphi_dx @ p, disc.sp.dphi_dy @ p], 1)
+        R_p = -(tp.phi.T @ (disc.w * (fluid.biot_alpha * (J - 1)
+                                      + fluid.storage * (p_q - p_n_q)))
+                + dt * fluid.mobility * (tp.dphi_dx.T @ (disc.w * grad_p[:, 0])
+                                         + tp.dphi_dy.T @ (disc.w * grad_p[:, 1])))
+        pb = disc.spb.phi @ p
+        R_p -= disc.spb.phi.T @ (alpha_p * disc.bp.weights * bc.drained * pb)
+        c_mean = tp.phi.T @ disc.w
+        extra_R = []
+        if bc.rigid.any():
+            extra_R.append(-np.sum(rigid_w * plate_gap) - plate_force)
+        if model.pin_pressure:
+            R_p += c_mean * lam
+            extra_R.append(c_mean @ (p - points.p))
+        R = np.concatenate([R_u, R_p, extra_R])
+        force, volume = (model.stress_scale * model.h,
+                         model.stress_scale * model.h**2 / model.modulus)
+        residual = max(np.abs(R_u).max() / force, np.abs(R_p).max() / volume,
+                       np.abs(extra_R[:1]).max(initial=0) / force * bc.rigid.any(),
+                       np.abs(extra_R[-1:]).max(initial=0) / volume * model.pin_pressure)
+        if not np.isfinite(residual):
+            raise FloatingPointError("the residual is not finite")
+        if residual < TOLERANCE:
+            break
+        if iteration == MAX_ITERATIONS:
+            raise ConvergenceError(f"Newton residual {residual:.2e} after {iteration} "
+                                   "iterations")
+
+        # tangent
+        tic = time.perf_counter()
+        A = _spatial_tangent(tangent, _in_plane(stress), sig)
+        uu = _reference(wJ[:, None, None, None, None] * A, Finv, Finv)
+        up = np.zeros((M, 2, 3, 1, 3))
+        up[:, :, 1:, 0, 0] = -fluid.biot_alpha * (wJ[:, None, None]
+                                                  * np.swapaxes(Finv, 1, 2))
+        pu = np.zeros((M, 1, 3, 2, 3))
+        pu[:, 0, 0, :, 1:] = up[:, :, 1:, 0, 0]
+        pp = np.zeros((M, 1, 3, 1, 3))
+        pp[:, 0, 0, 0, 0] = -fluid.storage * disc.w
+        pp[:, 0, 1, 0, 1] = pp[:, 0, 2, 0, 2] = -dt * fluid.mobility * disc.w
+        pen_p = np.zeros((len(disc.bp.weights), 1, 3, 1, 3))
+        pen_p[:, 0, 0, 0, 0] = -alpha_p * disc.bp.weights * bc.drained
+        constrained = bc.constrained | np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
+        K = sp.bmat([
+            [disc.block("uu", uu) + disc.block("bu", penalty_coefficients(
+                disc.bp, constrained, alpha_u)), disc.block("up", up)],
+            [disc.block("pu", pu), disc.block("pp", pp) + disc.block("bp", pen_p)]],
+            format="csc")
+        K = _bordered(K, disc, n, rigid_w, c_mean, model.pin_pressure)
+        stats["timings"]["assembly_s"] += time.perf_counter() - tic
+        tic = time.perf_counter()
+        dx = spla.spsolve(K, -R)
+        stats["timings"]["solve_s"] += time.perf_counter() - tic
+        du += dx[:2 * n]
+        p += dx[2 * n:3 * n]
+        extra = dx[3 * n:]
+        if bc.rigid.any():
+            plate += extra[0]
+            extra = extra[1:]
+        if model.pin_pressure:
+            lam += extra[0]
+
+    return _finish(model, points, disc, du, p, plate, gap, plate_gap, dt), iteration, residual
+
+
+def _finish(model, points, disc, du, p, plate, gap, plate_gap, dt):
+    """Nodal update after a converged step: state with D^I, positions, gaps, probes."""
+    n = len(points.nodes)
+    at = disc.at_points
+    H = _gradient(at.nodes, du, n)
+    J = np.linalg.det(np.eye(2) + H)
+    deps, dw = _strain_increment(H, J)
+    stress, state, _ = model.material.update(points.stress, points.state, deps, dw)
+    move = du.reshape(2, n).T
+    return Points(nodes=points.nodes + at.nodes.phi @ move, stress=stress, state=state, p=p,
+                  gap=np.where(disc.bc.constrained, gap, 0.0), plate=plate,
+                  plate_gap=np.where(disc.bc.rigid, plate_gap, 0.0),
+                  probes=points.probes + at.probes.phi @ move,
+                  stretching=deps / dt)
+
+
+@dataclass
+class _Discretisation:
+    """Shape functions, cells, boundary points and block patterns of one configuration."""
+
+    w: np.ndarray
+    su: ShapeFunctions
+    sp: ShapeFunctions
+    tu: ShapeFunctions
+    tp: ShapeFunctions
+    bp: object
+    sub: ShapeFunctions
+    spb: ShapeFunctions
+    bc: object
+    at_points: object
+    patterns: dict
+
+    def block(self, name, coeff):
+        test, trial = self.pairs[name]
+        return to_matrix(self.patterns[name], scatter(self.patterns[name], test, trial, coeff))
+
+    @property
+    def pairs(self):
+        return {"uu": (self.tu, self.su), "up": (self.tu, self.sp), "pu": (self.tp, self.su),
+                "pp": (self.tp, self.sp), "bu": (self.sub, self.sub),
+                "bp": (self.spb, self.spb)}
+
+
+@dataclass
+class _AtPoints:
+    nodes: ShapeFunctions
+    probes: ShapeFunctions
+
+
+def _discretise(model, nodes, evaluation):
+    case, s = model.case, model.case.efg
+    quad = background(case, nodes, model.loop, s)
+    bp = boundary_points(nodes, model.loop, model.edges)
+    su = ShapeFunctions.build(nodes, quad.points, s.weight_u, s.scale_u)
+    sp_ = ShapeFunctions.build(nodes, quad.points, s.weight_p, s.scale_p)
+    sub = ShapeFunctions.build(nodes, bp.points, s.weight_u, s.scale_u)
+    spb = ShapeFunctions.build(nodes, bp.points, s.weight_p, s.scale_p)
+    tu, tp = su, sp_
+    if s.correction == "vci":
+        tu = vci.corrected(su, quad.weights, sub, bp.weights, bp.normal)
+        tp = vci.corrected(sp_, quad.weights, spb, bp.weights, bp.normal)
+    at = ShapeFunctions.build(nodes, evaluation, s.weight_u, s.scale_u)
+    n = len(nodes)
+    at_points = _AtPoints(_rows(at, slice(0, n)), _rows(at, slice(n, None)))
+    disc = _Discretisation(quad.weights, su, sp_, tu, tp, bp, sub, spb,
+                           conditions(case, bp), at_points, {})
+    disc.patterns.update({name: Pattern.build(a, b) for name, (a, b) in disc.pairs.items()})
+    return disc
+
+
+def _rows(shape, rows):
+    """The shape functions at a slice of the evaluation points."""
+    return replace(shape, phi=shape.phi[rows], dphi_dx=shape.dphi_dx[rows],
+                   dphi_dy=shape.dphi_dy[rows], rcond=shape.rcond[rows])
+
+
+def _bordered(K, disc, n, rigid_w, c_mean, pin):
+    """Append the rigid plate's settlement and the mean-pressure multiplier, if any."""
+    cols, rows, corner = [], [], []
+    size = K.shape[0]
+    if disc.bc.rigid.any():
+        c = np.zeros(size)
+        c[n:2 * n] = -(disc.sub.phi.T @ rigid_w)
+        cols.append(c)
+        rows.append(c)
+        corner.append(rigid_w.sum())
+    if pin:
+        c = np.zeros(size)
+        c[2 * n:3 * n] = c_mean
+        cols.append(c)
+        rows.append(c)
+        corner.append(0.0)
+    if not cols:
+        return K
+    C = sp.csc_matrix(np.column_stack(cols))
+    return sp.bmat([[K, C], [C.T, sp.diags(corner)]], format="csc")
+
+
+def _in_plane(stress):
+    """The in-plane block (P, 2, 2) of stress-like vectors (P, 4)."""
+    return np.stack([np.stack([stress[:, 0], stress[:, 3]], 1),
+                     np.stack([stress[:, 3], stress[:, 1]], 1)], 1)
+
+
+def _spatial_tangent(C, effective, total):
+    """``T[m, f, k, g, l]``: d(J sigma F^-T) F^T / J with respect to ``d(du_g)/dx_l``.
+
+    Linearising ``J sigma F^-T`` gives, with ``l = grad_(n+1) d(du)`` and its skew part
+    ``w``: ``C : sym(l) + w sigma' - sigma' w + sigma tr(l) - sigma l^T`` (sigma' the
+    effective stress that the Jaumann rotation acts on, sigma the total stress).
+    """
+    d = np.eye(2)
+    T = np.einsum("fka,mab,glb->mfkgl", _B, C, _B)
+    T += 0.5 * (np.einsum("gf,mlk->mfkgl", d, effective)
+                - np.einsum("lf,mgk->mfkgl", d, effective)
+                - np.einsum("mfg,lk->mfkgl", effective, d)
+                + np.einsum("mfl,gk->mfkgl", effective, d))
+    T += np.einsum("mfk,gl->mfkgl", total, d) - np.einsum("mfl,gk->mfkgl", total, d)
+    return T
+
+
+def _gradient(shape, du, n):
+    """``grad_n(du)`` (P, 2, 2): ``H[p, i, j] = d du_i / d x_j``."""
+    ux, uy = du[:n], du[n:2 * n]
+    return np.stack([np.stack([shape.dphi_dx @ ux, shape.dphi_dy @ ux], 1),
+                     np.stack([shape.dphi_dx @ uy, shape.dphi_dy @ uy], 1)], 1)
+
+
+def _strain_increment(H, J):
+    """Midpoint stretching increment (Voigt) with volumetric part ``ln J``, and spin."""
+    half = np.eye(2) + 0.5 * H
+    L = H @ np.linalg.inv(half)
+    exx, eyy = L[:, 0, 0], L[:, 1, 1]
+    shift = 0.5 * (np.log(J) - exx - eyy)
+    deps = np.stack([exx + shift, eyy + shift, 0 * exx, L[:, 0, 1] + L[:, 1, 0]], 1)
+    return deps, 0.5 * (L[:, 0, 1] - L[:, 1, 0])
+
+
+def _reference(A, Finv_a, Finv_b):
+    """Coefficients on current-configuration gradients -> on x_n gradients (slots 1, 2)."""
+    M, fa, _, fb, _ = A.shape
+    out = np.zeros((M, fa, 3, fb, 3))
+    out[:, :, 1:, :, 1:] = np.einsum("mik,mfkgl,mjl->mfigj", Finv_a, A, Finv_b)
+    return out
+
+
+def _prescribed_increment(case, x, dt):
+    """Displacement increment ``(exp(L dt) - I) x`` of prescribed components (G, 2)."""
+    L = case.loading.L
+    return x @ (scipy.linalg.expm(L * dt) - np.eye(2)).T
+
+
+def _plate_force(case, t):
+    """Total force on the rigid plate (per unit thickness, y component) at time t."""
+    for name, edge in case.boundary.items():
+        if edge.uy == "rigid":
+            length = case.geometry.width if name in ("top", "bottom") else case.geometry.height
+            return float(edge.traction[1] * case.loading.factor(t) * length)
+    return 0.0
+
+
+def _penalties(model, times):
+    """Penalty factors: displacement (P-wave modulus / h) and pore pressure."""
+    case = model.case
+    dt = float(np.max(np.diff(times)))
+    alpha_u = case.efg.penalty * model.modulus / model.h
+    flow = dt * case.fluid.mobility + case.fluid.storage * model.h**2 \
+        + case.fluid.biot_alpha**2 * model.h**2 / model.modulus
+    return {"penalty_alpha_u": alpha_u, "penalty_alpha_p": case.efg.penalty * flow / model.h}
+
+
+def _history_row(model, points, t, dt, info):
+    case = model.case
+    p, q = invariants(points.stress)
+    top = model.loop[model.edges == 3]
+    height = points.nodes[top, 1].mean()
+    L22 = case.loading.L[1, 1]
+    err = (np.mean(np.abs((L22 - points.stretching[:, 1]) / L22)) if L22 != 0 else np.nan)
+    probes = {}
+    if len(points.probes):
+        s = case.efg
+        shape = ShapeFunctions.build(points.nodes, points.probes, s.weight_p, s.scale_p)
+        probes = {f"p_w@{pr.name}": v for pr, v in zip(case.probes, shape.phi @ points.p)}
+    x0 = case.nodes()[top]
+    return {"time": t, "eps_a": -np.log(height / case.geometry.height), "p": p.mean(),
+            "q": q.mean(), "err": err,
+            "gamma": np.mean(points.nodes[top, 0] - x0[:, 0]) / case.geometry.height,
+            "dt": dt, "iterations": info["iterations"], "substeps": info["substeps"],
+            "residual": info["residual"], **probes}
+
+
+def _snapshot(model, points, t):
+    s = model.case.efg
+    at = ShapeFunctions.build(points.nodes, points.nodes, s.weight_p, s.scale_p)
+    p, q = invariants(points.stress)
+    data = {"u": points.nodes - model.case.nodes(), "p_w": at.phi @ points.p,
+            "p_eff": p, "q": q, "stretching": points.stretching,
+            "support_radius": at.support}
+    data.update({k: v for k, v in points.state.items()})
+    return Snapshot(t, points.nodes.copy(), data)
