@@ -44,7 +44,6 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
-import scipy.linalg
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from tqdm import tqdm
@@ -56,17 +55,13 @@ from efg.boundary import (boundary_points, conditions, penalty_coefficients,
 from efg.mls import ShapeFunctions
 from efg.statics import background, cauchy_traction
 from soil.errors import ConvergenceError
-from soil.kinematics import IDENTITY, invariants
+from soil.kinematics import (IDENTITY, in_plane, invariants, prescribed_increment,
+                             spatial_tangent, strain_increment)
 from soil.results import Result, Snapshot
 
 TOLERANCE = 1e-8
 MAX_ITERATIONS = 25
 MAX_CUTS = 6
-
-#: Voigt strain component of (displacement field f, spatial derivative k).
-_B = np.zeros((2, 2, 4))
-_B[0, 0, 0] = _B[1, 1, 1] = _B[0, 1, 3] = _B[1, 0, 3] = 1.0
-
 
 @dataclass
 class Points:
@@ -203,13 +198,13 @@ def _step(model, points, t0, t1, stats):
     state_q = {k: su.phi @ v for k, v in points.state.items()}
     p_n_q = disc.sp.phi @ points.p
     bc = disc.bc
-    du_bar = _prescribed_increment(case, disc.bp.points, dt)
+    du_bar = prescribed_increment(case.loading.L, disc.bp.points, dt)
     alpha_u, alpha_p = _penalties(model, [0.0, dt]).values()
     fluid = case.fluid
     traction = (cauchy_traction(np.broadcast_to(model.sigma0, (len(disc.bp.weights), 4)),
                                 disc.bp.normal)
                 + bc.traction * bc.loaded * case.loading.factor(t1))
-    plate_force = _plate_force(case, t1)
+    plate_force = case.plate_force(t1)
 
     du, p, plate = np.zeros(2 * n), points.p.copy(), points.plate
     lam = 0.0
@@ -220,7 +215,7 @@ def _step(model, points, t0, t1, stats):
         if not np.all(J > 0):
             raise ConvergenceError(f"a background cell inverts (J = {J.min():.3g})")
         Finv = np.linalg.inv(F)
-        deps, dw = _strain_increment(H, J)
+        deps, dw = strain_increment(H, J)
         tic = time.perf_counter()
         stress, state, tangent = model.material.update(stress_q, state_q, deps, dw)
         stats["timings"]["material_s"] += time.perf_counter() - tic
@@ -229,7 +224,7 @@ def _step(model, points, t0, t1, stats):
         wJ = disc.w * J
 
         # residuals
-        sig = _in_plane(total)                                               # (M, 2, 2)
+        sig = in_plane(total)                                               # (M, 2, 2)
         P = wJ[:, None, None] * sig @ np.swapaxes(Finv, 1, 2)               # (M, f, i)
         tu, tp = disc.tu, disc.tp
         R_u = np.concatenate([tu.dphi_dx.T @ P[:, f, 0] + tu.dphi_dy.T @ P[:, f, 1]
@@ -274,7 +269,7 @@ def _step(model, points, t0, t1, stats):
 
         # tangent
         tic = time.perf_counter()
-        A = _spatial_tangent(tangent, _in_plane(stress), sig)
+        A = spatial_tangent(tangent, in_plane(stress), sig)
         uu = _reference(wJ[:, None, None, None, None] * A, Finv, Finv)
         up = np.zeros((M, 2, 3, 1, 3))
         up[:, :, 1:, 0, 0] = -fluid.biot_alpha * (wJ[:, None, None]
@@ -315,7 +310,7 @@ def _finish(model, points, disc, du, p, plate, gap, plate_gap, dt):
     at = disc.at_points
     H = _gradient(at.nodes, du, n)
     J = np.linalg.det(np.eye(2) + H)
-    deps, dw = _strain_increment(H, J)
+    deps, dw = strain_increment(H, J)
     stress, state, _ = model.material.update(points.stress, points.state, deps, dw)
     move = du.reshape(2, n).T
     return Points(nodes=points.nodes + at.nodes.phi @ move, stress=stress, state=state, p=p,
@@ -407,44 +402,11 @@ def _bordered(K, disc, n, rigid_w, c_mean, pin):
     return sp.bmat([[K, C], [C.T, sp.diags(corner)]], format="csc")
 
 
-def _in_plane(stress):
-    """The in-plane block (P, 2, 2) of stress-like vectors (P, 4)."""
-    return np.stack([np.stack([stress[:, 0], stress[:, 3]], 1),
-                     np.stack([stress[:, 3], stress[:, 1]], 1)], 1)
-
-
-def _spatial_tangent(C, effective, total):
-    """``T[m, f, k, g, l]``: d(J sigma F^-T) F^T / J with respect to ``d(du_g)/dx_l``.
-
-    Linearising ``J sigma F^-T`` gives, with ``l = grad_(n+1) d(du)`` and its skew part
-    ``w``: ``C : sym(l) + w sigma' - sigma' w + sigma tr(l) - sigma l^T`` (sigma' the
-    effective stress that the Jaumann rotation acts on, sigma the total stress).
-    """
-    d = np.eye(2)
-    T = np.einsum("fka,mab,glb->mfkgl", _B, C, _B)
-    T += 0.5 * (np.einsum("gf,mlk->mfkgl", d, effective)
-                - np.einsum("lf,mgk->mfkgl", d, effective)
-                - np.einsum("mfg,lk->mfkgl", effective, d)
-                + np.einsum("mfl,gk->mfkgl", effective, d))
-    T += np.einsum("mfk,gl->mfkgl", total, d) - np.einsum("mfl,gk->mfkgl", total, d)
-    return T
-
-
 def _gradient(shape, du, n):
     """``grad_n(du)`` (P, 2, 2): ``H[p, i, j] = d du_i / d x_j``."""
     ux, uy = du[:n], du[n:2 * n]
     return np.stack([np.stack([shape.dphi_dx @ ux, shape.dphi_dy @ ux], 1),
                      np.stack([shape.dphi_dx @ uy, shape.dphi_dy @ uy], 1)], 1)
-
-
-def _strain_increment(H, J):
-    """Midpoint stretching increment (Voigt) with volumetric part ``ln J``, and spin."""
-    half = np.eye(2) + 0.5 * H
-    L = H @ np.linalg.inv(half)
-    exx, eyy = L[:, 0, 0], L[:, 1, 1]
-    shift = 0.5 * (np.log(J) - exx - eyy)
-    deps = np.stack([exx + shift, eyy + shift, 0 * exx, L[:, 0, 1] + L[:, 1, 0]], 1)
-    return deps, 0.5 * (L[:, 0, 1] - L[:, 1, 0])
 
 
 def _reference(A, Finv_a, Finv_b):
@@ -453,21 +415,6 @@ def _reference(A, Finv_a, Finv_b):
     out = np.zeros((M, fa, 3, fb, 3))
     out[:, :, 1:, :, 1:] = np.einsum("mik,mfkgl,mjl->mfigj", Finv_a, A, Finv_b)
     return out
-
-
-def _prescribed_increment(case, x, dt):
-    """Displacement increment ``(exp(L dt) - I) x`` of prescribed components (G, 2)."""
-    L = case.loading.L
-    return x @ (scipy.linalg.expm(L * dt) - np.eye(2)).T
-
-
-def _plate_force(case, t):
-    """Total force on the rigid plate (per unit thickness, y component) at time t."""
-    for name, edge in case.boundary.items():
-        if edge.uy == "rigid":
-            length = case.geometry.width if name in ("top", "bottom") else case.geometry.height
-            return float(edge.traction[1] * case.loading.factor(t) * length)
-    return 0.0
 
 
 def _penalties(model, times):

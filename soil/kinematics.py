@@ -124,3 +124,79 @@ def as_strain_like(t):
     t = np.array(t, dtype=float)
     t[..., 3] *= 2.0
     return t
+
+
+#: Voigt strain component of (displacement field f, spatial derivative k): ``B[f, k, :]``.
+GRADIENT_TO_VOIGT = np.zeros((2, 2, 4))
+GRADIENT_TO_VOIGT[0, 0, 0] = GRADIENT_TO_VOIGT[1, 1, 1] = 1.0
+GRADIENT_TO_VOIGT[0, 1, 3] = GRADIENT_TO_VOIGT[1, 0, 3] = 1.0
+
+
+def in_plane(stress):
+    """The in-plane block (P, 2, 2) of stress-like vectors (P, 4)."""
+    return np.stack([np.stack([stress[:, 0], stress[:, 3]], 1),
+                     np.stack([stress[:, 3], stress[:, 1]], 1)], 1)
+
+
+def strain_increment(H, J):
+    """Midpoint stretching increment and spin of a step from its displacement gradient.
+
+    Parameters
+    ----------
+    H : ndarray, shape (P, 2, 2)
+        ``grad_n(du)``, ``H[p, i, j] = d du_i / d x_j`` on the start-of-step configuration.
+    J : ndarray, shape (P,)
+        ``det(I + H)``.
+
+    Returns
+    -------
+    deps : ndarray, shape (P, 4)
+        ``sym(H F_(1/2)^-1)`` as Voigt ``(xx, yy, zz, 2xy)``, its trace replaced by
+        ``ln J`` (spread over xx and yy) so that volumes are tracked exactly.
+    dw : ndarray, shape (P,)
+        Spin increment ``skew(H F_(1/2)^-1)_xy`` for the Hughes-Winget rotation.
+    """
+    L = H @ np.linalg.inv(np.eye(2) + 0.5 * H)
+    exx, eyy = L[:, 0, 0], L[:, 1, 1]
+    shift = 0.5 * (np.log(J) - exx - eyy)
+    deps = np.stack([exx + shift, eyy + shift, 0 * exx, L[:, 0, 1] + L[:, 1, 0]], 1)
+    return deps, 0.5 * (L[:, 0, 1] - L[:, 1, 0])
+
+
+def spatial_tangent(C, effective, total):
+    """``T[m, f, k, g, l]``: the linearisation of ``J sigma F^-T`` on the current configuration.
+
+    With ``l = grad_(n+1) d(du)`` (``l_gl = d du_g / d x_l``) and its skew part ``w``, the
+    change of ``J sigma F^-T F^T / J`` is ``C : sym(l) + w sigma' - sigma' w +
+    sigma tr(l) - sigma l^T``: the material tangent C (Voigt, from
+    :meth:`soil.camclay.CamClay.update`), the Jaumann rotation of the effective stress
+    sigma' and the change of area and orientation acting on the total stress sigma.
+
+    Parameters
+    ----------
+    C : ndarray, shape (P, 4, 4)
+    effective, total : ndarray, shape (P, 2, 2)
+        In-plane effective and total Cauchy stress.
+
+    Returns
+    -------
+    ndarray, shape (P, 2, 2, 2, 2)
+        Indices (point, test field f, test derivative k, trial field g, trial derivative l).
+    """
+    d = np.eye(2)
+    B = GRADIENT_TO_VOIGT
+    T = np.einsum("fka,mab,glb->mfkgl", B, C, B)
+    T += 0.5 * (np.einsum("gf,mlk->mfkgl", d, effective)
+                - np.einsum("lf,mgk->mfkgl", d, effective)
+                - np.einsum("mfg,lk->mfkgl", effective, d)
+                + np.einsum("mfl,gk->mfkgl", effective, d))
+    T += np.einsum("mfk,gl->mfkgl", total, d) - np.einsum("mfl,gk->mfkgl", total, d)
+    return T
+
+
+def prescribed_increment(L, x, dt):
+    """Displacement increment ``(exp(L dt) - I) x`` of points moving with a constant
+    velocity gradient L (2, 2) [1/s] over dt, from positions x (P, 2)."""
+    from scipy.linalg import expm
+
+    return x @ (expm(np.asarray(L) * dt) - np.eye(2)).T

@@ -361,6 +361,17 @@ class Case:
         return np.concatenate([i, j[1:] * nx + nx - 1, (ny - 1) * nx + i[-2::-1],
                                j[-2:0:-1] * nx])
 
+    def plate_force(self, t):
+        """Total force on the rigid plate at time t, per unit thickness (y, tension +).
+
+        ``traction[1] x load factor x initial edge length`` of the edge whose uy is rigid;
+        zero without a plate.
+        """
+        for _, edge in self.boundary.items():
+            if edge.uy == "rigid":
+                return float(edge.traction[1] * self.loading.factor(t) * self.geometry.width)
+        return 0.0
+
     def times(self):
         """Time levels [s], from 0 to ``time.end``; ``len - 1`` steps."""
         return self.time.levels()
