@@ -60,3 +60,76 @@ def oscillation_index(p, load):
 def overshoot(p, reference):
     """``max(p) / reference - 1``: how far the largest pore pressure exceeds the reference."""
     return float(np.max(p) / reference - 1.0)
+
+
+#: Time windows of the peer-data README's stability table.
+WINDOWS = ((0.0, 0.01), (0.01, 0.1), (0.1, 1.0), (1.0, np.inf))
+
+
+def terzaghi_errors(result):
+    """Pore-pressure and settlement errors of a Terzaghi run against the series solution.
+
+    Pressures at the probes ``p0..p9`` (heights 0..9) are compared with
+    :func:`soil.analytical.terzaghi`; errors are normalised by the undrained pressure p0
+    (``max |p - p_exact| / p0``, per time window) and by the load (``..._load``).
+
+    Returns
+    -------
+    dict
+        ``window_errors`` {window label: error / p0}, ``max_error_load_after_0.1``,
+        ``settlement_error_after_0.1`` (relative), ``overshoot`` (first step,
+        ``max p / p0 - 1``).
+    """
+    from soil.analytical import terzaghi
+
+    case = result.case
+    material, fluid = case.material(), case.fluid
+    load = -case.boundary.top.traction[1]
+    modulus = material.K + 4 * material.G / 3
+    height = case.geometry.height
+    probes = [p for p in case.probes if p.name != "p99"]
+    z = np.array([p.point[1] for p in probes])
+    h = result.history
+    args = (load, height, modulus, fluid.biot_alpha, fluid.storage, fluid.mobility)
+    exact = [terzaghi(z, t, *args) for t in h.time]
+    p_exact = np.array([e[0] for e in exact])
+    settle_exact = np.array([e[1] for e in exact])
+    p_h = h[[f"p_w@{p.name}" for p in probes]].to_numpy(float)
+    p0 = fluid.biot_alpha * load / modulus / (fluid.storage + fluid.biot_alpha**2 / modulus)
+    err = np.abs(p_h - p_exact).max(axis=1)
+    settle = height * (1 - np.exp(-h.eps_a.to_numpy()))
+    late = h.time.to_numpy() >= 0.1
+    windows = {f"{lo:g} <= t < {hi:g}": float(err[(h.time >= lo) & (h.time < hi)].max() / p0)
+               for lo, hi in WINDOWS if ((h.time >= lo) & (h.time < hi)).any()}
+    return {"window_errors": windows,
+            "max_error_load_after_0.1": float(err[late].max() / load),
+            "settlement_error_after_0.1": float(np.abs(settle / settle_exact - 1)[late].max()),
+            "overshoot": float(p_h[0].max() / p0 - 1)}
+
+
+def mandel_errors(result):
+    """Centre and mid-width pressures of a Mandel run against the closed form.
+
+    Returns
+    -------
+    dict
+        ``max_error``: ``max |p - p_exact|`` over time at the probes ``centre`` and
+        ``mid``, over the undrained pressure ``p0 = F (1 + nu_u)/(3a) = F/(2a)``;
+        ``peak_centre`` and ``peak_centre_exact``: the largest centre pressure over p0
+        (above 1: the Mandel-Cryer effect).
+    """
+    from soil.analytical import mandel
+
+    case = result.case
+    material = case.material()
+    force = -case.plate_force(case.times()[-1])
+    a = case.geometry.width
+    h = result.history
+    x = np.array([dict((p.name, p.point) for p in case.probes)[n][0] for n in ("centre", "mid")])
+    exact = np.array([mandel(x, t, force, a, material.G, material.nu, case.fluid.mobility)
+                      for t in h.time])
+    ours = h[["p_w@centre", "p_w@mid"]].to_numpy(float)
+    p0 = force / (2 * a)
+    return {"max_error": float(np.abs(ours - exact).max() / p0),
+            "peak_centre": float(ours[:, 0].max() / p0),
+            "peak_centre_exact": float(exact[:, 0].max() / p0)}

@@ -169,7 +169,8 @@ def _advance(model, points, t0, t1, stats):
         try:
             t, current, iterations, residuals = t0, points, 0, []
             for _ in range(2**cut):
-                current, its, res = _step(model, current, t, t + dt / 2**cut, stats)
+                with np.errstate(all="ignore"):  # failures end in ConvergenceError
+                    current, its, res = _step(model, current, t, t + dt / 2**cut, stats)
                 t += dt / 2**cut
                 iterations += its
                 residuals.append(res)

@@ -220,12 +220,26 @@ class CamClay:
         return new_stress, new_state, tangent
 
     def _solve_local(self, x, plastic, vertex, args, tol, max_iter):
-        """Newton on ``R(x) = 0`` for x = (ln p', q, ln p'c, dgamma) on all points at once."""
+        """Newton on ``R(x) = 0`` for x = (ln p', q, ln p'c, dgamma) on all points at once.
+
+        Overflow in a diverging iteration is not warned about: it ends in
+        :class:`ConvergenceError`.
+        """
+        with np.errstate(all="ignore"):
+            return self._newton(x, plastic, vertex, args, tol, max_iter)
+
+    def _newton(self, x, plastic, vertex, args, tol, max_iter):
         for _ in range(max_iter):
             R, J, dRdy = self._residual(x, plastic, vertex, *args)
             if np.all(np.abs(R) < tol):
                 return x, J, dRdy
-            step = np.linalg.solve(J, -R[:, :, None])[:, :, 0]
+            if not np.all(np.isfinite(R)):
+                break
+            try:
+                step = np.linalg.solve(J, -R[:, :, None])[:, :, 0]
+            except np.linalg.LinAlgError:
+                raise ConvergenceError("Cam-clay return mapping met a singular local "
+                                       "Jacobian: reduce the strain increment per step") from None
             step[:, [0, 2]] = np.clip(step[:, [0, 2]], -0.5, 0.5)
             x = x + step
         bad = int(np.sum(np.any(np.abs(R) >= tol, axis=1)))
