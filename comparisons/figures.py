@@ -186,3 +186,33 @@ def efg_convergence(table, path):
     fig.savefig(path, dpi=150)
     plt.close(fig)
     return path
+
+
+def unconfined_compression(table, path):
+    """Paper Figs. 4 and 6: EFG stress paths against the driver, and ERR against strain.
+
+    ``table`` is :func:`comparisons.verification.unconfined_compression`.
+    """
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.4), constrained_layout=True)
+    first = table[(table.cells == table.cells.iloc[0])
+                  & (table.correction == table.correction.iloc[0])]
+    left.plot(first.p_driver, first.q_driver, "k-", lw=3, alpha=0.35,
+              label="stress-point driver (theory)")
+    styles = {"delaunay": "-", "squares": "--"}
+    colours = {"vci": "C0", "none": "C3"}
+    for (cells, correction), group in table.groupby(["cells", "correction"], sort=False):
+        label = f"EFG, {cells} cells, {'VCI' if correction == 'vci' else 'plain Gauss'}"
+        left.plot(group.p, group.q, styles[cells], color=colours[correction], lw=1.4,
+                  label=label)
+        right.semilogy(group.eps_a * 100, group.err.clip(lower=1e-12), styles[cells],
+                       color=colours[correction], lw=1.4, label=label)
+    left.set(xlabel="p'/p'$_0$", ylabel="q/p'$_0$", xlim=(0.45, 1.05), ylim=(0, 0.85),
+             title="Unconfined compression (111 nodes): stress path")
+    right.set(xlabel="axial strain (%)", ylabel="ERR (paper eq. 1)",
+              title="Error of the nodal stretching D$_{22}$")
+    for ax in (left, right):
+        ax.grid(alpha=0.3, which="both")
+    left.legend(fontsize=8, loc="upper right")
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path

@@ -26,6 +26,12 @@ def make_report(root="reports"):
         ("patch test", lambda: tables.write(verification.patch_test(),
                                             root / "tables" / "patch_test")),
         ("cantilever convergence", lambda: _convergence(root)),
+        ("unconfined compression (Figs. 4, 6)", lambda: _unconfined(root)),
+        ("soil column stability (Table 2, EFG)",
+         lambda: tables.write(verification.soil_column(), root / "tables" / "table2_efg")),
+        ("Terzaghi and Mandel (EFG)",
+         lambda: tables.write(verification.consolidation(),
+                              root / "tables" / "efg_consolidation")),
         ("stress paths (driver)",
          lambda: [figures.stress_paths_driver(root / "figures" / "stress_paths_driver.png")]),
     ]
@@ -41,3 +47,11 @@ def _convergence(root):
     vci = table[table.correction == "vci"]
     return [*tables.write(table, root / "tables" / "efg_convergence"),
             figures.efg_convergence(vci, root / "figures" / "efg_convergence.png")]
+
+
+def _unconfined(root):
+    table = verification.unconfined_compression()
+    return [*tables.write(table, root / "tables" / "efg_unconfined"),
+            *tables.write(verification.path_summary(table),
+                          root / "tables" / "efg_unconfined_summary"),
+            figures.unconfined_compression(table, root / "figures" / "unconfined_efg.png")]

@@ -1,4 +1,5 @@
-"""Verification tables of the static EFG core: patch test and cantilever convergence.
+"""Verification tables of the EFG solvers: patch test, cantilever convergence, the paper's
+unconfined compression and soil column, Terzaghi and Mandel.
 
 Each function runs the built-in case over a sweep of settings and returns a DataFrame;
 the tests assert on these tables and the report writes them.
@@ -9,7 +10,11 @@ import itertools
 import numpy as np
 import pandas as pd
 
+from comparisons.metrics import (axis_profile, mandel_errors, oscillation_index, overshoot,
+                                 terzaghi_errors)
+from efg.solver import solve as coupled_solve
 from efg.statics import solve
+from soil.driver import run_test
 from soil.problems import load_case
 
 #: The paper's weights: quartic (Q), exponential c = 0.5 (E-A) and c = 0.25 (E-B).
@@ -56,3 +61,97 @@ def cantilever_convergence(levels=((13, 4), (25, 7), (49, 13), (97, 25)),
                          "nodes": nx * ny, **errors, "rate": rate})
             previous = (h, errors["energy"])
     return pd.DataFrame(rows)
+
+
+def unconfined_compression(cells=CELLS, corrections=("vci", "none"), steps=100):
+    """EFG unconfined compression beside the stress-point driver, per step.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Long format: ``cells, correction, time, eps_a, p, q, err`` (p', q over p'0, ERR of
+        paper eq. 1) and the driver's ``p_driver, q_driver`` at the same axial strain.
+    """
+    frames = []
+    for cell, correction in itertools.product(cells, corrections):
+        case = load_case("unconfined-compression", [f"efg.cells={cell}",
+                                                    f"efg.correction={correction}",
+                                                    f"time.steps={steps}"])
+        history = coupled_solve(case, progress=False).history
+        clay = case.material()
+        driver = run_test(clay, "undrained-plane-strain", float(history.eps_a.max()), 2000)
+        frames.append(pd.DataFrame({
+            "cells": cell, "correction": correction, "time": history.time,
+            "eps_a": history.eps_a, "p": history.p / clay.p0, "q": history.q / clay.p0,
+            "err": history.err.astype(float),
+            "p_driver": np.interp(history.eps_a, driver.eps_a, driver.p) / clay.p0,
+            "q_driver": np.interp(history.eps_a, driver.eps_a, driver.q) / clay.p0}))
+    return pd.concat(frames, ignore_index=True)
+
+
+def path_summary(table):
+    """Largest path error (over p'0) and ERR statistics per (cells, correction)."""
+    gap = np.maximum(np.abs(table.p - table.p_driver), np.abs(table.q - table.q_driver))
+    return (table.assign(path_error=gap)
+            .groupby(["cells", "correction"], sort=False)
+            .agg(path_error=("path_error", "max"), err_mean=("err", "mean"),
+                 err_max=("err", "max"), err_final=("err", "last"))
+            .reset_index())
+
+
+#: Weight combinations of the paper's Table 2 for (u, p_w).
+COMBINATIONS = {"Q/Q": ("quartic", "quartic"), "E-A/E-A": ("exp:0.5", "exp:0.5"),
+                "E-A/E-B": ("exp:0.5", "exp:0.25")}
+
+
+def soil_column(permeabilities=(1e-5, 1e-7), densities=(11, 21, 41),
+                combinations=COMBINATIONS, later=10):
+    """Pore-pressure stability of the EFG soil column (paper Table 2 analogue).
+
+    For each permeability, nodal density (nodes along the column, 3 across) and weight
+    combination: the overshoot (``max p_w / load - 1``) and the oscillation index
+    (:func:`comparisons.metrics.oscillation_index` of p_w along the axis over the load) at
+    the first step and at the step nearest to ``later x dt0``; ``ratio`` is
+    ``h^2 / (c_v dt0)`` with c_v from the initial stiffness.
+    """
+    rows = []
+    for k, ny, (label, (wu, wp)) in itertools.product(permeabilities, densities,
+                                                      combinations.items()):
+        case = load_case("soil-column", [f"material.permeability={k}",
+                                         f"discretisation.ny={ny}", f"efg.weight_u={wu}",
+                                         f"efg.weight_p={wp}", "time.end=4000.0"])
+        result = coupled_solve(case, progress=False)
+        load = -case.boundary.top.traction[1]
+        times = np.array([s.time for s in result.snapshots])
+        step = int(np.argmin(np.abs(times - later * case.time.dt0)))
+        first, late = axis_profile(result, 1)[1], axis_profile(result, step)[1]
+        rows.append({"permeability": k, "ny": ny, "h": case.spacing[1],
+                     "ratio": stability_number(case), "weights": label,
+                     "overshoot_first": overshoot(first, load),
+                     "oscillation_first": oscillation_index(first, load),
+                     "time_later": times[step],
+                     "oscillation_later": oscillation_index(late, load)})
+    return pd.DataFrame(rows)
+
+
+def stability_number(case):
+    """``h^2 / (c_v dt0)`` of a column: h the vertical nodal spacing, c_v = mobility x
+    (K + 4G/3) at the initial state, dt0 the first step."""
+    material = case.material()
+    stress, state = material.initial_state(1)
+    K, G = (material.moduli(-stress[0, :3].mean(), state["v"][0])
+            if hasattr(material, "moduli") else (material.K, material.G))
+    dt0 = case.times()[1]
+    return float(case.spacing[1] ** 2 / (case.fluid.mobility * (K + 4 * G / 3) * dt0))
+
+
+def consolidation():
+    """Terzaghi (5 x 41 nodes) and Mandel errors of the EFG solver (default settings)."""
+    terzaghi = terzaghi_errors(coupled_solve(load_case(
+        "terzaghi", ["discretisation.nx=5", "discretisation.ny=41"]), progress=False))
+    mandel = mandel_errors(coupled_solve(load_case("mandel"), progress=False))
+    rows = [("terzaghi", f"max abs(p - p_exact) / p0, {w}", v)
+            for w, v in terzaghi.pop("window_errors").items()]
+    rows += [("terzaghi", k, v) for k, v in terzaghi.items()]
+    rows += [("mandel", k, v) for k, v in mandel.items()]
+    return pd.DataFrame(rows, columns=["case", "metric", "value"])
