@@ -9,8 +9,10 @@ and derivative arrays share one pattern (:class:`efg.mls.ShapeFunctions`). A blo
 with ``S = (phi, dphi/dx, dphi/dy)`` of the test node a and trial node b, and ``coeff``
 holding the integration weight times the material or coupling coefficients. The node-node
 pattern of a block is that of ``Phi_test^T Phi_trial`` (nodes that share a point); it is
-computed once per step and every Newton iteration scatters into it (numba kernel, no COO
-of duplicates).
+computed once per step and every Newton iteration scatters into it: a numba kernel walks
+the pattern row by row (the test node), marks where each trial node's entry sits, and
+accumulates the integrand of every point in the test node's support; no search, no COO of
+duplicates.
 """
 
 from dataclasses import dataclass
@@ -69,35 +71,46 @@ def scatter(pattern, test, trial, coeff):
         Values of every field pair on the pattern.
     """
     out = np.zeros((coeff.shape[1], coeff.shape[3], pattern.nnz))
-    _scatter(pattern.indptr, pattern.indices,
-             test.phi.indptr.astype(np.int64), test.phi.indices.astype(np.int64),
-             components(test),
+    phi = test.phi
+    order = sp.csr_matrix((np.arange(phi.nnz, dtype=np.int64), phi.indices, phi.indptr),
+                          shape=phi.shape).tocsc()  # test entries grouped by node
+    used = coeff != 0  # slots (phi, d/dx, d/dy) that the integrand touches
+    slots_a = np.flatnonzero(used.any(axis=(0, 1, 3, 4)))
+    slots_b = np.flatnonzero(used.any(axis=(0, 1, 2, 3)))
+    _scatter(pattern.indptr, pattern.indices, order.indptr.astype(np.int64),
+             order.indices.astype(np.int64), order.data.astype(np.int64), components(test),
              trial.phi.indptr.astype(np.int64), trial.phi.indices.astype(np.int64),
-             components(trial), np.ascontiguousarray(coeff), out)
+             components(trial), np.ascontiguousarray(coeff), slots_a, slots_b, out)
     return out
 
 
 @numba.njit(cache=True)
-def _scatter(p_ptr, p_idx, a_ptr, a_idx, a_val, b_ptr, b_idx, b_val, coeff, out):
+def _scatter(p_ptr, p_idx, a_colptr, a_points, a_entry, a_val, b_ptr, b_idx, b_val, coeff,
+             slots_a, slots_b, out):
+    """Row by row of the pattern: a column map replaces any search."""
     ft, fs = coeff.shape[1], coeff.shape[3]
+    position = np.empty(p_idx.max() + 1 if len(p_idx) else 0, dtype=np.int64)
     t = np.empty((ft, fs, 3))
-    for q in range(len(a_ptr) - 1):
-        for ka in range(a_ptr[q], a_ptr[q + 1]):
-            row = a_idx[ka]
-            start, stop = p_ptr[row], p_ptr[row + 1]
+    for row in range(len(p_ptr) - 1):
+        for k in range(p_ptr[row], p_ptr[row + 1]):
+            position[p_idx[k]] = k
+        for c in range(a_colptr[row], a_colptr[row + 1]):
+            q, ka = a_points[c], a_entry[c]
             for f in range(ft):  # t = S_a . coeff[q]: the test side contracted once
                 for g in range(fs):
-                    for j in range(3):
+                    for j in slots_b:
                         s = 0.0
-                        for i in range(3):
+                        for i in slots_a:
                             s += a_val[i, ka] * coeff[q, f, i, g, j]
                         t[f, g, j] = s
             for kb in range(b_ptr[q], b_ptr[q + 1]):
-                pos = start + np.searchsorted(p_idx[start:stop], b_idx[kb])
+                pos = position[b_idx[kb]]
                 for f in range(ft):
                     for g in range(fs):
-                        out[f, g, pos] += (t[f, g, 0] * b_val[0, kb] + t[f, g, 1] * b_val[1, kb]
-                                           + t[f, g, 2] * b_val[2, kb])
+                        s = 0.0
+                        for j in slots_b:
+                            s += t[f, g, j] * b_val[j, kb]
+                        out[f, g, pos] += s
 
 
 def to_matrix(pattern, values):
