@@ -110,16 +110,21 @@ def _run(args):
     print(f"wrote {args.out}: {json_line(result.summary)}")
 
 
-def _efg(case):
+def _efg(case, progress=True):
     if case.analysis == "static":
         from efg.statics import solve
-    else:
-        from efg.solver import solve
-    return solve(case)
+
+        return solve(case)
+    from efg.solver import solve
+
+    return solve(case, progress=progress)
 
 
 #: Solvers by method name: ``case -> Result``.
-METHODS = {"efg": _efg}
+METHODS = {"efg": _efg,
+           **{name: (lambda case, progress=True, name=name: __import__(
+               "fem_reference.solver", fromlist=["solve"]).solve(case, name, progress))
+              for name in ("fem-th", "fem-p1p1", "fem-p1p1-stab", "fem-q1q1", "fem-q2q1")}}
 
 
 def json_line(summary):

@@ -12,9 +12,10 @@ import pandas as pd
 
 from comparisons.metrics import (axis_profile, mandel_errors, oscillation_index, overshoot,
                                  terzaghi_errors)
-from efg.solver import solve as coupled_solve
+from comparisons import runner
 from efg.statics import solve
 from soil.driver import run_test
+from soil.errors import SoilwaterError
 from soil.problems import load_case
 
 #: The paper's weights: quartic (Q), exponential c = 0.5 (E-A) and c = 0.25 (E-B).
@@ -72,13 +73,14 @@ def unconfined_compression(cells=CELLS, corrections=("vci", "none"), steps=100):
         Long format: ``cells, correction, time, eps_a, p, q, err`` (p', q over p'0, ERR of
         paper eq. 1) and the driver's ``p_driver, q_driver`` at the same axial strain.
     """
+    settings = list(itertools.product(cells, corrections))
+    outcomes = _results([("unconfined-compression", ("efg.cells=" + cell,
+                                                     "efg.correction=" + correction,
+                                                     f"time.steps={steps}"))
+                         for cell, correction in settings])
     frames = []
-    for cell, correction in itertools.product(cells, corrections):
-        case = load_case("unconfined-compression", [f"efg.cells={cell}",
-                                                    f"efg.correction={correction}",
-                                                    f"time.steps={steps}"])
-        history = coupled_solve(case, progress=False).history
-        clay = case.material()
+    for (cell, correction), result in zip(settings, outcomes):
+        history, clay = result.history, result.case.material()
         driver = run_test(clay, "undrained-plane-strain", float(history.eps_a.max()), 2000)
         frames.append(pd.DataFrame({
             "cells": cell, "correction": correction, "time": history.time,
@@ -114,13 +116,14 @@ def soil_column(permeabilities=(1e-5, 1e-7), densities=(11, 21, 41),
     the first step and at the step nearest to ``later x dt0``; ``ratio`` is
     ``h^2 / (c_v dt0)`` with c_v from the initial stiffness.
     """
-    rows = []
-    for k, ny, (label, (wu, wp)) in itertools.product(permeabilities, densities,
-                                                      combinations.items()):
-        case = load_case("soil-column", [f"material.permeability={k}",
+    settings = list(itertools.product(permeabilities, densities, combinations.items()))
+    results = _results([("soil-column", (f"material.permeability={k}",
                                          f"discretisation.ny={ny}", f"efg.weight_u={wu}",
-                                         f"efg.weight_p={wp}", "time.end=4000.0"])
-        result = coupled_solve(case, progress=False)
+                                         f"efg.weight_p={wp}", "time.end=4000.0"))
+                        for k, ny, (_, (wu, wp)) in settings])
+    rows = []
+    for (k, ny, (label, _)), result in zip(settings, results):
+        case = result.case
         load = -case.boundary.top.traction[1]
         times = np.array([s.time for s in result.snapshots])
         step = int(np.argmin(np.abs(times - later * case.time.dt0)))
@@ -132,6 +135,24 @@ def soil_column(permeabilities=(1e-5, 1e-7), densities=(11, 21, 41),
                      "time_later": times[step],
                      "oscillation_later": oscillation_index(late, load)})
     return pd.DataFrame(rows)
+
+
+def _results(specs, method="efg"):
+    """Results of ``(case, overrides)`` runs through the parallel, cached runner.
+
+    Raises
+    ------
+    SoilwaterError
+        If any run failed (a verification table needs them all).
+    """
+    outcomes = runner.run([runner.Job(case, method, tuple(o)) for case, o in specs],
+                          progress=False)
+    failed = [o for o in outcomes if not o.ok]
+    if failed:
+        raise SoilwaterError(f"{len(failed)} verification run(s) failed, first: "
+                             f"{failed[0].job.case} {' '.join(failed[0].job.overrides)}: "
+                             f"{failed[0].error}")
+    return [o.result for o in outcomes]
 
 
 def stability_number(case):
@@ -147,9 +168,9 @@ def stability_number(case):
 
 def consolidation():
     """Terzaghi (5 x 41 nodes) and Mandel errors of the EFG solver (default settings)."""
-    terzaghi = terzaghi_errors(coupled_solve(load_case(
-        "terzaghi", ["discretisation.nx=5", "discretisation.ny=41"]), progress=False))
-    mandel = mandel_errors(coupled_solve(load_case("mandel"), progress=False))
+    terzaghi, mandel = _results([("terzaghi", ("discretisation.nx=5", "discretisation.ny=41")),
+                                 ("mandel", ())])
+    terzaghi, mandel = terzaghi_errors(terzaghi), mandel_errors(mandel)
     rows = [("terzaghi", f"max abs(p - p_exact) / p0, {w}", v)
             for w, v in terzaghi.pop("window_errors").items()]
     rows += [("terzaghi", k, v) for k, v in terzaghi.items()]

@@ -1,0 +1,165 @@
+"""Run cases with several methods and settings: a sweep, in parallel, cached.
+
+A :class:`Job` names a case (built-in or TOML file), a method and ``--set`` overrides.
+:func:`run` executes jobs in a local process pool (one worker per core by default) or on a
+Dask distributed scheduler (``dask=ADDRESS``, optional extra ``soilwater[dask]``), and
+returns one :class:`Outcome` per job, in order. A job that fails is an outcome with its
+error; the others complete.
+
+Results are cached on disk under a key hashing the resolved case, the method and the
+source code of the solvers (so any change to ``soil/``, ``efg/`` or ``fem_reference/``
+invalidates the cache): rerunning a report only recomputes what changed.
+"""
+
+import hashlib
+import json
+import os
+import pickle
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from functools import cache
+from pathlib import Path
+
+import pandas as pd
+from tqdm import tqdm
+
+from soil.errors import SoilwaterError
+from soil.problems import load_case
+
+ROOT = Path(__file__).resolve().parents[1]
+CACHE = ROOT / ".cache" / "runs"
+
+
+@dataclass(frozen=True)
+class Job:
+    """One run: a case, a method and overrides ``("section.key=value", ...)``."""
+
+    case: str
+    method: str
+    overrides: tuple = ()
+    labels: tuple = field(default=(), compare=False)
+
+    def key(self):
+        """Cache key: the resolved case, the method and the solvers' source code."""
+        spec = {"case": load_case(self.case, self.overrides).to_dict(),
+                "method": self.method, "code": code_version()}
+        return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:24]
+
+
+@dataclass
+class Outcome:
+    """What a job gave: its Result or its error, the wall time and whether it was cached."""
+
+    job: Job
+    result: object = None
+    error: str | None = None
+    seconds: float = 0.0
+    cached: bool = False
+
+    @property
+    def ok(self):
+        return self.error is None
+
+
+def solver(method):
+    """The solver of a method name: ``case -> Result``."""
+    from comparisons.cli import METHODS
+
+    if method not in METHODS:
+        raise SoilwaterError(f"unknown method {method!r}: use one of {', '.join(METHODS)}")
+    return METHODS[method]
+
+
+def execute(job, cache_dir=CACHE):
+    """Run one job (or read it from the cache); never raises for a failing case."""
+    tic = time.perf_counter()
+    try:
+        path = Path(cache_dir) / f"{job.key()}.pkl" if cache_dir else None
+        if path is not None and path.exists():
+            with path.open("rb") as fh:
+                return Outcome(job, pickle.load(fh), None, time.perf_counter() - tic, True)
+        case = load_case(job.case, job.overrides)
+        result = solver(job.method)(case, progress=False)
+        if path is not None:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_suffix(f".{os.getpid()}.tmp")
+            with tmp.open("wb") as fh:
+                pickle.dump(result, fh)
+            os.replace(tmp, path)
+        return Outcome(job, result, None, time.perf_counter() - tic, False)
+    except (SoilwaterError, ArithmeticError, ValueError) as err:
+        return Outcome(job, None, f"{type(err).__name__}: {err}", time.perf_counter() - tic)
+
+
+def run(jobs, workers=None, dask=None, cache_dir=CACHE, progress=True, desc="sweep"):
+    """Execute jobs and return their outcomes in order.
+
+    Parameters
+    ----------
+    jobs : list of Job
+    workers : int, optional
+        Local processes (default: the number of cores; 1 runs in this process).
+    dask : str, optional
+        Address of a Dask distributed scheduler; the same jobs go there instead.
+    cache_dir : path or None
+        Where results are cached (None: no cache).
+    progress : bool
+        A progress bar over the jobs.
+    """
+    jobs = list(jobs)
+    bar = tqdm(total=len(jobs), desc=desc, unit="run", disable=not progress or None,
+               leave=False)
+    if dask is not None:
+        outcomes = _run_dask(jobs, dask, cache_dir)
+        bar.update(len(jobs))
+    elif (workers or os.cpu_count()) == 1 or len(jobs) == 1:
+        outcomes = []
+        for job in jobs:
+            outcomes.append(execute(job, cache_dir))
+            bar.update()
+    else:
+        with ProcessPoolExecutor(max_workers=workers or os.cpu_count()) as pool:
+            futures = [pool.submit(execute, job, cache_dir) for job in jobs]
+            outcomes = []
+            for future in futures:
+                outcomes.append(future.result())
+                bar.update()
+    bar.close()
+    return outcomes
+
+
+def _run_dask(jobs, address, cache_dir):
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        raise SoilwaterError("--dask needs the optional extra: pip install "
+                             "'soilwater[dask]'") from None
+    with Client(address) as client:
+        return client.gather(client.map(execute, jobs, cache_dir=cache_dir, pure=False))
+
+
+def table(outcomes):
+    """One row per outcome: labels, case, method, overrides, status, error, seconds."""
+    rows = []
+    for o in outcomes:
+        summary = o.result.summary if o.ok else {}
+        rows.append({**dict(o.job.labels), "case": o.job.case, "method": o.job.method,
+                     "overrides": " ".join(o.job.overrides),
+                     "status": "ok" if o.ok else "failed", "error": o.error or "",
+                     "seconds": round(o.seconds, 3), "cached": o.cached,
+                     "steps": summary.get("steps"),
+                     "newton_iterations": summary.get("newton_iterations")})
+    return pd.DataFrame(rows)
+
+
+@cache
+def code_version():
+    """Hash of the solvers' source files (soil, efg, fem_reference) and the version."""
+    from importlib.metadata import version
+
+    digest = hashlib.sha256(version("soilwater").encode())
+    for folder in ("soil", "efg", "fem_reference"):
+        for path in sorted((ROOT / folder).glob("*.py")):
+            digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]

@@ -1,0 +1,31 @@
+"""The sweep runner: parallel equals serial, failures are rows, the cache is used."""
+
+import numpy as np
+
+from comparisons.runner import Job, run, table
+
+JOBS = [Job("soil-column", "efg", ("time.end=100.0", f"efg.weight_p={w}"),
+            labels=(("weights", w),)) for w in ("quartic", "exp:0.25")]
+BROKEN = Job("soil-column", "efg", ("material.permeability=-1",))
+
+
+def test_parallel_equals_serial_and_failures_are_reported(tmp_path):
+    serial = run(JOBS, workers=1, cache_dir=None, progress=False)
+    parallel = run(JOBS + [BROKEN], workers=2, cache_dir=None, progress=False)
+    for a, b in zip(serial, parallel):
+        np.testing.assert_array_equal(a.result.history.to_numpy(float),
+                                      b.result.history.to_numpy(float))
+    rows = table(parallel)
+    assert list(rows.status) == ["ok", "ok", "failed"]
+    assert "permeability" in rows.error.iloc[2] and rows.weights.iloc[0] == "quartic"
+
+
+def test_a_rerun_reads_the_cache(tmp_path):
+    first = run(JOBS[:1], workers=1, cache_dir=tmp_path, progress=False)
+    again = run(JOBS[:1], workers=1, cache_dir=tmp_path, progress=False)
+    assert not first[0].cached and again[0].cached
+    np.testing.assert_array_equal(first[0].result.history.to_numpy(float),
+                                  again[0].result.history.to_numpy(float))
+    changed = run([Job("soil-column", "efg", ("time.end=100.0", "efg.scale_p=1.4"))],
+                  workers=1, cache_dir=tmp_path, progress=False)
+    assert not changed[0].cached
