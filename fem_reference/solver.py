@@ -1,0 +1,461 @@
+"""Updated-Lagrangian u-p FEM (scikit-fem): the reference for the EFG solver.
+
+The same scheme as ``efg/solver.py`` (design.md section 4), with finite elements. A step
+from t_n to t_(n+1) is solved on the mesh at x_n (bases rebuilt there) for the
+displacement increment ``du`` and ``p_w`` at t_(n+1):
+
+* equilibrium, ``int grad_n(v) . J sigma F^-T dOmega_n = int v . t dGamma_n`` with
+  ``F = I + grad_n(du)``, ``sigma = sigma' - alpha p_w I`` (tension positive stress, p_w
+  compression positive); ``t`` is the initial total stress ``sigma0 . n`` on every
+  boundary facet plus the edge traction x load factor on free components (a dead load
+  on the start-of-step facets);
+* continuity, backward Euler: ``-int q [alpha (J - 1) + S (p - p_n)] dOmega_n
+  - dt (k/gamma_w) int grad(q) . grad(p) dOmega_n = 0``;
+* the stress from the material's return mapping with the midpoint strain increment and
+  the Hughes-Winget spin (:func:`soil.kinematics.strain_increment`), at the quadrature
+  points, which are the material points (their state needs no remapping).
+
+Newton's method starts from the last step's velocity x dt (``L x`` at the first step) and
+uses :func:`soil.kinematics.spatial_tangent` (material tangent, Jaumann
+rotation, change of area and orientation), pulled back to x_n gradients. Convergence,
+cut-back and scales follow the EFG solver: the displacement residual below ``TOLERANCE``
+times stress scale x spacing, the continuity residual below ``TOLERANCE`` times area x
+stress scale / P-wave modulus; a failing step (no convergence, an element with
+``J <= 0``, a material failure) is halved up to ``MAX_CUTS`` times before the run stops
+with one error naming the step time.
+
+Essential conditions are exact: fixed and prescribed displacement DOFs
+(``(exp(L dt) - I) x_n`` at the DOF's current position) and drained pressure DOFs
+(p_w = 0) are eliminated; a rigid plate ties every uy DOF of its edge to one unknown
+whose equation is the plate's total force; a confined body with incompressible
+constituents and no drained edge gets the mean-pressure pin of the EFG solver (one
+Lagrange multiplier).
+
+``fem-p1p1-stab`` adds the flow-equation perturbation of Aguilar, Gaspar, Lisbona and
+Rodrigo (2008), "Numerical stabilization of Biot's consolidation model by a perturbation
+on the flow equation", Int. J. Numer. Meth. Engng 75, 1282-1300:
+``- beta int grad(p - p_n) . grad(q) dOmega_n`` with their ``beta = h^2 / (4 M)``,
+``M = lambda + 2 mu`` the P-wave modulus at the initial state [kPa] and h the smallest
+nodal spacing [m]. Their model has alpha = 1 and no storage; we keep their beta for any
+alpha and S (on the Terzaghi column, alpha = 0.6, S = 0.0625, ``alpha^2 h^2 / (4 M)``
+leaves a 10 % first-step overshoot, ``h^2 / (4 M)`` 0.3 %).
+
+Linear solver: SuperLU (``scipy.sparse.linalg.splu``, COLAMD ordering) on the condensed,
+unsymmetric tangent. For a linear elastic skeleton the factorisation is reused within a
+step (modified Newton) while it contracts the residual at least tenfold per iteration.
+"""
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from tqdm import tqdm
+
+from fem_reference.assembly import Shapes, block
+from fem_reference.spaces import Space, cell_bases
+from soil.errors import ConvergenceError, InputError
+from soil.kinematics import (IDENTITY, in_plane, invariants, prescribed_increment,
+                             spatial_tangent, strain_increment)
+from soil.results import Result, Snapshot
+
+TOLERANCE = 1e-8
+MAX_ITERATIONS = 25
+MAX_CUTS = 6
+CONTRACTION = 0.1
+
+
+@dataclass
+class Model:
+    """What stays fixed over a run: case, method, material, space, constraints, scales."""
+
+    case: object
+    method: str
+    material: object
+    space: Space
+    sigma0: np.ndarray       # (4,) initial total stress
+    h: float                 # smallest nodal spacing [m]
+    stress_scale: float
+    modulus: float           # P-wave modulus at the initial state
+    pin_pressure: bool
+    constraints: object
+    probes: object           # (P, n_p) pressure basis at the probes (reference coords)
+
+    @classmethod
+    def build(cls, case, method):
+        if case.analysis != "coupled":
+            raise InputError(f"--method {method} solves coupled cases; case {case.name!r}"
+                             f" is {case.analysis!r}: use --method efg")
+        material = case.material()
+        space = Space.build(case, method)
+        stress, state = material.initial_state(1)
+        K, G = (material.moduli(-stress[0, :3].mean(), state["v"][0])
+                if hasattr(material, "moduli") else (material.K, material.G))
+        sigma0 = stress[0] - case.fluid.biot_alpha * case.initial_pore_pressure * IDENTITY
+        edges = [edge for _, edge in case.boundary.items()]
+        tractions = [abs(np.asarray(e.traction, float)).max() for e in edges
+                     if e.traction != "exact"]
+        scale = max([abs(stress[0]).max(), *tractions, 1e-12])
+        free = any("free" in (e.ux, e.uy) or "rigid" in (e.ux, e.uy) for e in edges)
+        pin = case.fluid.storage == 0 and not free and not any(e.drained for e in edges)
+        _, pb = cell_bases(space.mesh0, space.pair)
+        points = np.array([p.point for p in case.probes]).reshape(-1, 2)
+        return cls(case, method, material, space, sigma0, float(min(case.spacing)), scale,
+                   float(K + 4 * G / 3), pin, Constraints.build(case, space),
+                   pb.probes(points.T) if len(points) else None)
+
+    @property
+    def beta(self):
+        """Stabilisation ``h^2 / (4 M)`` of fem-p1p1-stab [m2/kPa], else 0."""
+        return self.h**2 / (4 * self.modulus) if self.space.pair.stabilised else 0.0
+
+
+@dataclass
+class Constraints:
+    """Exact essential conditions on the unknowns ``[ux (n_u), uy (n_u), p (n_p)]``.
+
+    Attributes
+    ----------
+    fixed : ndarray of int
+        Unknowns with a zero increment (fixed displacement).
+    prescribed : ndarray of int
+        Displacement unknowns following ``v = L x``; ``component`` is 0 (x) or 1 (y).
+    component : ndarray of int
+    drained : ndarray of int
+        Pressure unknowns held at p_w = 0.
+    plate : ndarray of int
+        uy unknowns tied to the rigid plate.
+    T : scipy.sparse.csr_matrix
+        Full increment = ``T @ reduced``: free unknowns, then the plate (if any).
+    is_u : ndarray of bool
+        Which reduced unknowns are displacements (the plate included).
+    """
+
+    fixed: np.ndarray
+    prescribed: np.ndarray
+    component: np.ndarray
+    drained: np.ndarray
+    plate: np.ndarray
+    T: object
+    is_u: np.ndarray
+
+    @classmethod
+    def build(cls, case, space):
+        n_u = space.n_u
+        sets = {"fixed": [], "prescribed": [], "rigid": []}
+        component, drained = [], []
+        for name, edge in case.boundary.items():
+            dofs = space.u_dofs[name]
+            for f, kind in enumerate((edge.ux, edge.uy)):
+                if kind in sets:
+                    sets[kind].append(f * n_u + dofs)
+                    if kind == "prescribed":
+                        component.append(np.full(len(dofs), f))
+            if edge.drained:
+                drained.append(2 * n_u + space.p_dofs[name])
+        fixed, plate, drained = (np.unique(np.concatenate(s)) if s else np.zeros(0, int)
+                                 for s in (sets["fixed"], sets["rigid"], drained))
+        prescribed, first = np.unique(np.concatenate(sets["prescribed"] or [[]]).astype(int),
+                                      return_index=True)
+        component = np.concatenate(component or [[]]).astype(int)[first]
+        n = 2 * n_u + space.n_p
+        free = np.setdiff1d(np.arange(n), np.concatenate([fixed, prescribed, drained, plate]))
+        rows = np.concatenate([free, plate])
+        cols = np.concatenate([np.arange(len(free)), np.full(len(plate), len(free))])
+        T = sp.csr_matrix((np.ones(len(rows)), (rows, cols)),
+                          shape=(n, len(free) + int(len(plate) > 0)))
+        is_u = np.append(free < 2 * n_u, np.ones(int(len(plate) > 0), bool))
+        return cls(fixed, prescribed, component, drained, plate, T, is_u)
+
+
+@dataclass
+class State:
+    """What is carried from step to step (quadrature arrays flattened element-major)."""
+
+    vertices: np.ndarray     # (N, 2) current mesh vertices [m]
+    stress: np.ndarray       # (E Q, 4) effective stress, tension positive
+    state: dict              # material state at the quadrature points
+    p: np.ndarray            # (n_p,) pore pressure DOFs, compression positive
+    weights: np.ndarray      # (E Q,) current quadrature weights [m2]
+    stretching: np.ndarray   # (E Q, 4) stretching of the last step [1/s]
+    velocity: np.ndarray     # (2 n_u,) du/dt of the last step [m/s]: the predictor
+
+
+def solve(case, method="fem-th", progress=True):
+    """Run a coupled case with an FEM element pair and return its Result.
+
+    Parameters
+    ----------
+    case : Case
+        ``analysis = "coupled"``; Cam-clay or linear elastic skeleton.
+    method : str
+        One of :data:`fem_reference.spaces.PAIRS`.
+    progress : bool
+        Show a progress bar on the terminal.
+
+    Raises
+    ------
+    ConvergenceError
+        A step that still fails after ``MAX_CUTS`` halvings (the message names the time).
+    InputError
+        A static case, or a quadrilateral method on a ``grid+centres`` case.
+    """
+    model = Model.build(case, method)
+    current = _initial_state(model)
+    times = case.times()
+    rows, snapshots = [], [_snapshot(model, current, 0.0)]
+    stats = {"newton_iterations": 0, "factorisations": 0, "cutbacks": 0,
+             "max_residual": 0.0, "timings": {"assembly_s": 0.0, "solve_s": 0.0,
+                                              "material_s": 0.0}}
+    tic = time.perf_counter()
+    for t0, t1 in tqdm(list(zip(times[:-1], times[1:])), desc=f"{method} {case.name}",
+                       unit="step", disable=not progress or None, leave=False):
+        current, info = _advance(model, current, t0, t1, stats)
+        rows.append(_history_row(model, current, t1, t1 - t0, info))
+        snapshots.append(_snapshot(model, current, t1))
+    stats["timings"]["total_s"] = time.perf_counter() - tic
+    history = pd.DataFrame(rows)
+    if history["err"].isna().all():
+        history["err"] = None
+    space = model.space
+    summary = {"steps": len(times) - 1, "dofs": int(2 * space.n_u + space.n_p),
+               "elements": int(space.mesh0.t.shape[1]), "tolerance": TOLERANCE,
+               "linear_solver": "scipy.sparse.linalg.splu", "stabilisation_beta": model.beta,
+               **stats}
+    options = {"elements": f"{space.pair.u_element.__name__}/"
+                           f"{space.pair.p_element.__name__}",
+               "intorder": space.pair.intorder, "stabilised": space.pair.stabilised}
+    return Result(case, method, options, history, snapshots, summary)
+
+
+def _initial_state(model):
+    case, space = model.case, model.space
+    ub, _ = cell_bases(space.mesh0, space.pair)
+    n_points = ub.dx.size
+    stress, state = model.material.initial_state(n_points)
+    return State(vertices=case.nodes(), stress=stress, state=state,
+                 p=np.full(space.n_p, float(case.initial_pore_pressure)),
+                 weights=ub.dx.ravel(), stretching=np.zeros((n_points, 4)),
+                 velocity=(case.loading.L @ ub.doflocs).ravel())
+
+
+def _advance(model, current, t0, t1, stats):
+    """One time level, cut back (halved) while it fails."""
+    dt = t1 - t0
+    for cut in range(MAX_CUTS + 1):
+        try:
+            t, trial, iterations, residuals = t0, current, 0, []
+            for _ in range(2**cut):
+                trial, its, res = _step(model, trial, t, t + dt / 2**cut, stats)
+                t += dt / 2**cut
+                iterations += its
+                residuals.append(res)
+            stats["cutbacks"] += cut
+            stats["newton_iterations"] += iterations
+            stats["max_residual"] = max(stats["max_residual"], *residuals)
+            return trial, {"iterations": iterations, "residual": max(residuals),
+                           "substeps": 2**cut}
+        except (ConvergenceError, FloatingPointError) as err:
+            reason = err
+    raise ConvergenceError(f"step t = {t0:g} -> {t1:g} s failed after {MAX_CUTS} halvings "
+                           f"of the time step ({reason}): reduce time steps or loading "
+                           "rate, or check the boundary conditions")
+
+
+@dataclass
+class _Discretisation:
+    """Bases of the current mesh: shape data, quadrature weights, external forces."""
+
+    u: Shapes
+    p: Shapes
+    dx: np.ndarray           # (E, Q) [m2]
+    doflocs: np.ndarray      # (2, n_u) current DOF positions [m]
+    external: np.ndarray     # (2 n_u,) boundary forces at t_(n+1) [force per thickness]
+
+
+def _discretise(model, vertices, t1):
+    space = model.space
+    mesh = space.moved(vertices)
+    ub, pb = cell_bases(mesh, space.pair)
+    external = np.zeros(2 * space.n_u)
+    factor = model.case.loading.factor(t1)
+    sigma0 = in_plane(model.sigma0[None])[0]
+    for name, edge in model.case.boundary.items():
+        if len(space.edge_facets[name]) == 0:
+            continue
+        fb = space.facet_basis(mesh, name)
+        load = np.einsum("ij,jfq->fqi", sigma0, fb.normals)
+        loaded = np.array([edge.ux, edge.uy]) == "free"
+        load = load + loaded * np.asarray(edge.traction, float) * factor
+        external += Shapes.of(fb).vector(np.concatenate(
+            [(fb.dx[..., None] * load)[..., None], np.zeros(load.shape + (2,))], -1))
+    return _Discretisation(Shapes.of(ub), Shapes.of(pb), ub.dx, ub.doflocs, external)
+
+
+def _step(model, current, t0, t1, stats):
+    """Newton iterations for one step; returns the new state, iterations, residual."""
+    case, space, con = model.case, model.space, model.constraints
+    fluid, dt = case.fluid, t1 - t0
+    tic = time.perf_counter()
+    disc = _discretise(model, current.vertices, t1)
+    stats["timings"]["assembly_s"] += time.perf_counter() - tic
+    n_u, E, Q = space.n_u, *disc.dx.shape
+    x = np.concatenate([current.velocity * dt, current.p])
+    x[con.prescribed] = prescribed_increment(
+        case.loading.L, disc.doflocs.T[con.prescribed % n_u], dt)[
+        np.arange(len(con.prescribed)), con.component]
+    x[con.drained] = 0.0
+    c_mean = np.zeros(len(x))
+    c_mean[2 * n_u:] = disc.p.vector(disc.dx[..., None, None] * [1.0, 0, 0])
+    lam, lu, previous = 0.0, None, np.inf
+    force = model.stress_scale * model.h
+    volume = model.stress_scale * model.h**2 / model.modulus
+    dw_u = disc.dx.ravel()
+    for iteration in range(1, MAX_ITERATIONS + 1):
+        grads = disc.u.values(x[:2 * n_u].reshape(2, n_u))[..., 1:].reshape(E * Q, 2, 2)
+        J = np.linalg.det(np.eye(2) + grads)
+        if not np.all(J > 0):
+            raise ConvergenceError(f"an element inverts (J = {J.min():.3g})")
+        Finv = np.linalg.inv(np.eye(2) + grads)
+        deps, dw = strain_increment(grads, J)
+        tic = time.perf_counter()
+        stress, state, tangent = model.material.update(current.stress, current.state,
+                                                       deps, dw)
+        stats["timings"]["material_s"] += time.perf_counter() - tic
+        R, total, wJ = _residual(model, disc, current, x, stress, J, Finv, dt)
+        R += lam * c_mean
+        reduced = con.T.T @ R
+        if len(con.plate):
+            reduced[-1] -= case.plate_force(t1)
+        pin = c_mean @ (x - np.concatenate([np.zeros(2 * n_u), current.p]))
+        residual = _norm(reduced, con, force, volume, model.pin_pressure * pin)
+        if not np.isfinite(residual):
+            raise FloatingPointError("the residual is not finite")
+        if residual < TOLERANCE:
+            break
+        if iteration == MAX_ITERATIONS:
+            raise ConvergenceError(f"Newton residual {residual:.2e} after {iteration} "
+                                   "iterations")
+        if lu is None or not hasattr(model.material, "stiffness") \
+                or residual > CONTRACTION * previous:
+            tic = time.perf_counter()
+            K = _tangent(model, disc, stress, total, tangent, wJ, Finv, dt)
+            lu = _factorise(con.T.T @ K @ con.T, con.T.T @ c_mean, model.pin_pressure)
+            stats["factorisations"] += 1
+            stats["timings"]["assembly_s"] += time.perf_counter() - tic
+        previous = residual
+        tic = time.perf_counter()
+        rhs = np.append(reduced, pin) if model.pin_pressure else reduced
+        dz = -lu.solve(rhs)
+        stats["timings"]["solve_s"] += time.perf_counter() - tic
+        x += con.T @ dz[:con.T.shape[1]]
+        if model.pin_pressure:
+            lam += dz[-1]
+
+    n_v = len(current.vertices)
+    du = x[:2 * n_u].reshape(2, n_u)[:, :n_v].T
+    return State(current.vertices + du, stress, state, x[2 * n_u:], dw_u * J,
+                 deps / dt, x[:2 * n_u] / dt), iteration, residual
+
+
+def _residual(model, disc, current, x, stress, J, Finv, dt):
+    """Full residual ``[R_u, R_p]``, total stress and ``w J`` at the quadrature points."""
+    fluid, n_u = model.case.fluid, model.space.n_u
+    E, Q = disc.dx.shape
+    p_vals = disc.p.values(x[2 * n_u:]).reshape(E * Q, 3)
+    pn_vals = disc.p.values(current.p).reshape(E * Q, 3)
+    total = stress - fluid.biot_alpha * p_vals[:, :1] * IDENTITY
+    wJ = disc.dx.ravel() * J
+    P = wJ[:, None, None] * in_plane(total) @ np.swapaxes(Finv, 1, 2)     # (M, f, i)
+    cu = np.concatenate([np.zeros((E * Q, 2, 1)), P], axis=2)
+    R_u = disc.u.vector(cu.reshape(E, Q, 2, 3)) - disc.external
+    w = disc.dx.ravel()[:, None]
+    cp = np.zeros((E * Q, 3))
+    cp[:, 0] = fluid.biot_alpha * (J - 1) + fluid.storage * (p_vals[:, 0] - pn_vals[:, 0])
+    cp[:, 1:] = (dt * fluid.mobility * p_vals[:, 1:]
+                 + model.beta * (p_vals[:, 1:] - pn_vals[:, 1:]))
+    R_p = -disc.p.vector((w * cp).reshape(E, Q, 1, 3))
+    return np.concatenate([R_u, R_p]), total, wJ
+
+
+def _tangent(model, disc, stress, total, tangent, wJ, Finv, dt):
+    """The full Jacobian of :func:`_residual` with respect to ``[du, p]``."""
+    fluid = model.case.fluid
+    E, Q = disc.dx.shape
+    M = E * Q
+    A = spatial_tangent(tangent, in_plane(stress), in_plane(total))
+    uu = np.zeros((M, 2, 3, 2, 3))
+    uu[:, :, 1:, :, 1:] = np.einsum("mik,mfkgl,mjl->mfigj", Finv,
+                                    wJ[:, None, None, None, None] * A, Finv)
+    up = np.zeros((M, 2, 3, 1, 3))
+    up[:, :, 1:, 0, 0] = -fluid.biot_alpha * wJ[:, None, None] * np.swapaxes(Finv, 1, 2)
+    pu = np.zeros((M, 1, 3, 2, 3))
+    pu[:, 0, 0, :, 1:] = up[:, :, 1:, 0, 0]
+    pp = np.zeros((M, 1, 3, 1, 3))
+    w = disc.dx.ravel()
+    pp[:, 0, 0, 0, 0] = -fluid.storage * w
+    pp[:, 0, 1, 0, 1] = pp[:, 0, 2, 0, 2] = -(dt * fluid.mobility + model.beta) * w
+    shape = (E, Q)
+    return sp.bmat([[block(disc.u, disc.u, uu.reshape(*shape, 2, 3, 2, 3)),
+                     block(disc.u, disc.p, up.reshape(*shape, 2, 3, 1, 3))],
+                    [block(disc.p, disc.u, pu.reshape(*shape, 1, 3, 2, 3)),
+                     block(disc.p, disc.p, pp.reshape(*shape, 1, 3, 1, 3))]], format="csr")
+
+
+def _factorise(K, c, pin):
+    """SuperLU of the condensed tangent, bordered by the mean-pressure pin if any."""
+    if pin:
+        c = sp.csr_matrix(c[:, None])
+        K = sp.bmat([[K, c], [c.T, None]])
+    try:
+        return spla.splu(sp.csc_matrix(K))
+    except RuntimeError as err:
+        raise ConvergenceError(f"the tangent is singular ({err})") from None
+
+
+def _norm(reduced, con, force, volume, pin):
+    """Scaled residual: displacement and plate rows / force, pressure rows / volume, pin."""
+    return max(np.abs(reduced[con.is_u]).max(initial=0) / force,
+               np.abs(reduced[~con.is_u]).max(initial=0) / volume, abs(pin) / volume)
+
+
+def _history_row(model, current, t, dt, info):
+    """One row of the history: the EFG columns, domain averages weighted by volume."""
+    case = model.case
+    p, q = invariants(current.stress)
+    w = current.weights / current.weights.sum()
+    top = model.space.mesh0.p[1] > case.geometry.height * (1 - 1e-9)
+    height = current.vertices[top, 1].mean()
+    L22 = case.loading.L[1, 1]
+    err = (np.sum(w * np.abs((L22 - current.stretching[:, 1]) / L22)) if L22 != 0
+           else np.nan)
+    probes = {}
+    if model.probes is not None:
+        probes = {f"p_w@{pr.name}": v for pr, v in zip(case.probes, model.probes @ current.p)}
+    x0 = model.space.mesh0.p[0, top]
+    return {"time": t, "eps_a": -np.log(height / case.geometry.height), "p": w @ p,
+            "q": w @ q, "err": err,
+            "gamma": np.mean(current.vertices[top, 0] - x0) / case.geometry.height,
+            "dt": dt, "iterations": info["iterations"], "substeps": info["substeps"],
+            "residual": info["residual"], **probes}
+
+
+def _snapshot(model, current, t):
+    """Vertex fields with cells: u, p_w, and p', q and state averaged to the vertices."""
+    mesh0 = model.space.mesh0
+    cells = mesh0.t
+    E = cells.shape[1]
+    p, q = invariants(current.stress)
+    quantities = {"p_eff": p, "q": q, **current.state}
+    data = {"u": current.vertices - mesh0.p.T, "p_w": current.p[:len(current.vertices)]}
+    volume = current.weights.reshape(E, -1)
+    share = np.repeat(volume.sum(1), cells.shape[0])
+    node_volume = np.bincount(cells.T.ravel(), share, minlength=mesh0.p.shape[1])
+    for name, values in quantities.items():
+        mean = (volume * values.reshape(E, -1)).sum(1)
+        data[name] = np.bincount(cells.T.ravel(), np.repeat(mean, cells.shape[0]),
+                                 minlength=mesh0.p.shape[1]) / node_volume
+    return Snapshot(t, current.vertices.copy(), data,
+                    cells=[(model.space.cell_type, cells.T.copy())])

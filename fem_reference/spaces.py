@@ -1,0 +1,143 @@
+"""Meshes, element pairs and boundary DOF sets of the FEM reference (scikit-fem).
+
+The mesh vertices are the case's nodes (:meth:`soil.problems.Case.nodes`, same order), so
+a FEM run and an EFG run of a case share their node set; second-order elements add
+scikit-fem's midside (and, for Q2, centre) DOFs. Triangles: two per grid cell for the
+``grid`` layout (diagonal from lower left to upper right), Delaunay triangles
+(scipy.spatial) for ``grid+centres`` (four per cell around its centre). Quadrilaterals:
+the cells of the structured grid (``grid`` layout only).
+
+Every element pair uses one Gauss rule for all terms, so the material points (quadrature
+points) of the displacement and the pressure bases coincide; they keep their place in the
+reference element while the mesh moves, which carries the material state from step to
+step without remapping.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import Delaunay
+from skfem import (CellBasis, ElementQuad1, ElementQuad2, ElementTriP1, ElementTriP2,
+                   FacetBasis, MeshQuad, MeshTri)
+
+from soil.errors import InputError
+from soil.problems import EDGES
+
+
+@dataclass(frozen=True)
+class Pair:
+    """An element pair: cell shape, displacement and pressure elements, Gauss order.
+
+    ``stabilised`` adds the flow-equation perturbation of Aguilar et al. (2008) to the
+    continuity equation (see :mod:`fem_reference.solver`).
+    """
+
+    shape: str
+    u_element: type
+    p_element: type
+    intorder: int
+    stabilised: bool = False
+
+
+#: The FEM methods of ``soilwater run --method``.
+PAIRS = {
+    "fem-th": Pair("triangle", ElementTriP2, ElementTriP1, 4),
+    "fem-p1p1": Pair("triangle", ElementTriP1, ElementTriP1, 2),
+    "fem-p1p1-stab": Pair("triangle", ElementTriP1, ElementTriP1, 2, stabilised=True),
+    "fem-q1q1": Pair("quad", ElementQuad1, ElementQuad1, 3),
+    "fem-q2q1": Pair("quad", ElementQuad2, ElementQuad1, 5),
+}
+
+
+def initial_mesh(case, method):
+    """The mesh of the case's initial nodes for a method's cell shape.
+
+    Raises
+    ------
+    InputError
+        A quadrilateral method on a ``grid+centres`` case.
+    """
+    pair = PAIRS[method]
+    nodes = case.nodes()
+    d = case.discretisation
+    k = (np.arange(d.ny - 1)[:, None] * d.nx + np.arange(d.nx - 1)[None, :]).ravel()
+    if pair.shape == "quad":
+        if d.layout != "grid":
+            raise InputError(f"--method {method} needs discretisation.layout = 'grid' "
+                             f"(quadrilaterals on the grid), case {case.name!r} has "
+                             f"{d.layout!r}: use fem-th, fem-p1p1 or fem-p1p1-stab")
+        return MeshQuad(nodes.T, np.array([k, k + 1, k + 1 + d.nx, k + d.nx]))
+    if d.layout == "grid":
+        t = np.hstack([[k, k + 1, k + 1 + d.nx], [k, k + 1 + d.nx, k + d.nx]])
+    else:
+        t = Delaunay(nodes).simplices.T
+    return MeshTri(nodes.T, t)
+
+
+@dataclass
+class Space:
+    """Topology, elements and boundary DOF sets of a run, fixed from the initial mesh.
+
+    Attributes
+    ----------
+    mesh0 : skfem.Mesh
+        The initial mesh (vertices = case nodes).
+    pair : Pair
+    edge_facets : dict
+        Boundary facet indices of each edge name (left, right, bottom, top).
+    u_dofs, p_dofs : dict
+        Scalar DOF indices of the displacement / pressure basis on each edge (vertex and
+        midside DOFs), from the initial coordinates.
+    n_u, n_p : int
+        DOFs of one displacement component and of the pressure.
+    """
+
+    mesh0: object
+    pair: Pair
+    edge_facets: dict
+    u_dofs: dict
+    p_dofs: dict
+    n_u: int
+    n_p: int
+
+    @classmethod
+    def build(cls, case, method):
+        mesh = initial_mesh(case, method)
+        pair = PAIRS[method]
+        ub, pb = cell_bases(mesh, pair)
+        edge_facets = _edge_facets(mesh, case.geometry)
+        return cls(mesh, pair, edge_facets,
+                   {e: ub.get_dofs(f).flatten() for e, f in edge_facets.items()},
+                   {e: pb.get_dofs(f).flatten() for e, f in edge_facets.items()},
+                   ub.N, pb.N)
+
+    def moved(self, vertices):
+        """The mesh with the same topology on vertices (N, 2) [m]."""
+        return type(self.mesh0)(np.ascontiguousarray(vertices.T), self.mesh0.t,
+                                sort_t=False)
+
+    def facet_basis(self, mesh, edge):
+        """Displacement basis on the current facets of one edge (for tractions)."""
+        return FacetBasis(mesh, self.pair.u_element(), facets=self.edge_facets[edge],
+                          intorder=self.pair.intorder)
+
+    @property
+    def cell_type(self):
+        """VTK cell name of the vertex mesh."""
+        return "quad" if self.pair.shape == "quad" else "triangle"
+
+
+def cell_bases(mesh, pair):
+    """Scalar displacement and pressure bases on one mesh, with one Gauss rule."""
+    return (CellBasis(mesh, pair.u_element(), intorder=pair.intorder),
+            CellBasis(mesh, pair.p_element(), intorder=pair.intorder))
+
+
+def _edge_facets(mesh, geometry):
+    """Boundary facets of each edge of the rectangle, from their midpoints."""
+    facets = mesh.boundary_facets()
+    mid = mesh.p[:, mesh.facets[:, facets]].mean(axis=1)
+    dist = np.stack([np.abs(mid[0]), np.abs(mid[0] - geometry.width),
+                     np.abs(mid[1]), np.abs(mid[1] - geometry.height)])
+    edge = np.argmin(dist, axis=0)
+    return {name: facets[edge == k] for k, name in enumerate(EDGES)}
