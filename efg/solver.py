@@ -18,13 +18,14 @@ cells rebuilt there) for the displacement increment ``du`` and ``p_w`` at t_(n+1
 
 Newton's method linearises ``J sigma F^-T``: the material's consistent tangent, the
 rotation of the effective stress by the spin and the change of area and orientation
-(:func:`_spatial_tangent`); the only approximation is that the spin's rotation acts on
+(:func:`soil.kinematics.spatial_tangent`); the only approximation is that the spin's rotation acts on
 sigma' at t_(n+1) rather than on the rotated start-of-step stress, a difference of the
 order of the strain increment. A step converges when the displacement residual is
 below ``TOLERANCE`` times the force scale (stress scale x nodal spacing) and the continuity
 residual below ``TOLERANCE`` times the volume scale (area x stress scale / P-wave modulus).
 A step that does not converge, inverts a background cell or fails in the material is cut
-back (halved) up to ``MAX_CUTS`` times before the run stops with one clear error.
+back (halved) up to ``soil.coupling.MAX_CUTS`` times before the run stops with one clear
+error.
 
 Material state lives on the nodes (the material points): at the start of a step the
 integration points take stress and state from the nodes by MLS interpolation, and after a
@@ -43,10 +44,8 @@ import time
 from dataclasses import dataclass, replace
 
 import numpy as np
-import pandas as pd
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from tqdm import tqdm
 
 from efg import vci
 from efg.assembly import Pattern, scatter, to_matrix
@@ -54,14 +53,12 @@ from efg.boundary import (boundary_points, conditions, penalty_coefficients,
                           segment_edges)
 from efg.mls import ShapeFunctions
 from efg.statics import background, cauchy_traction
+from soil.coupling import (MAX_ITERATIONS, TOLERANCE, Scales, axial_strain, march,
+                           stretching_error)
 from soil.errors import ConvergenceError
 from soil.kinematics import (IDENTITY, in_plane, invariants, prescribed_increment,
                              spatial_tangent, strain_increment)
 from soil.results import Result, Snapshot
-
-TOLERANCE = 1e-8
-MAX_ITERATIONS = 25
-MAX_CUTS = 6
 
 @dataclass
 class Points:
@@ -80,35 +77,20 @@ class Points:
 
 @dataclass
 class Model:
-    """What stays fixed over a run: case, material, settings, boundary topology, scales."""
+    """What stays fixed over a run: case, material, boundary topology, scales."""
 
     case: object
     material: object
     loop: np.ndarray
     edges: np.ndarray
-    sigma0: np.ndarray       # (4,) initial total stress
-    h: float
-    stress_scale: float
-    modulus: float           # P-wave modulus at the initial state
-    pin_pressure: bool
+    scales: Scales
 
     @classmethod
     def build(cls, case):
         material = case.material()
-        nodes = case.nodes()
         loop = case.boundary_loop()
-        stress, state = material.initial_state(1)
-        K, G = (material.moduli(-stress[0, :3].mean(), state["v"][0])
-                if hasattr(material, "moduli") else (material.K, material.G))
-        sigma0 = stress[0] - case.fluid.biot_alpha * case.initial_pore_pressure * IDENTITY
-        edges = [edge for _, edge in case.boundary.items()]
-        tractions = [abs(np.asarray(e.traction, float)).max() for e in edges
-                     if e.traction != "exact"]
-        scale = max([abs(stress[0]).max(), *tractions, 1e-12])
-        free = any("free" in (e.ux, e.uy) or "rigid" in (e.ux, e.uy) for e in edges)
-        pin = (case.fluid.storage == 0 and not free and not any(e.drained for e in edges))
-        return cls(case, material, loop, segment_edges(nodes, loop, case.geometry),
-                   sigma0, float(min(case.spacing)), scale, float(K + 4 * G / 3), pin)
+        return cls(case, material, loop, segment_edges(case.nodes(), loop, case.geometry),
+                   Scales.of(case, material))
 
 
 def solve(case, progress=True):
@@ -129,24 +111,18 @@ def solve(case, progress=True):
         Bad supports (too small a scale factor) and other invalid settings.
     """
     model = Model.build(case)
-    points = _initial_points(model)
-    times = case.times()
-    rows, snapshots = [], [_snapshot(model, points, 0.0)]
-    stats = {"newton_iterations": 0, "cutbacks": 0, "max_residual": 0.0,
-             "timings": {"shape_functions_s": 0.0, "assembly_s": 0.0, "solve_s": 0.0,
+    stats = {"timings": {"shape_functions_s": 0.0, "assembly_s": 0.0, "solve_s": 0.0,
                          "material_s": 0.0}}
     tic = time.perf_counter()
-    for t0, t1 in tqdm(list(zip(times[:-1], times[1:])), desc=f"efg {case.name}",
-                       unit="step", disable=not progress or None, leave=False):
-        points, info = _advance(model, points, t0, t1, stats)
-        rows.append(_history_row(model, points, t1, t1 - t0, info))
-        snapshots.append(_snapshot(model, points, t1))
+    history, snapshots = march(
+        case, _initial_points(model),
+        step=lambda points, t0, t1: _step(model, points, t0, t1, stats),
+        row=lambda points, t, dt, info: _history_row(model, points, t, dt, info),
+        snapshot=lambda points, t: _snapshot(model, points, t),
+        stats=stats, progress=progress, desc=f"efg {case.name}")
     stats["timings"]["total_s"] = time.perf_counter() - tic
-    history = pd.DataFrame(rows)
-    if history["err"].isna().all():
-        history["err"] = None
-    summary = {"steps": len(times) - 1, "dofs": 3 * len(points.nodes),
-               "tolerance": TOLERANCE, **stats, **_penalties(model, times)}
+    summary = {"steps": len(history), "dofs": 3 * len(case.nodes()), "tolerance": TOLERANCE,
+               **stats, **_penalties(model, case.times())}
     return Result(case, "efg", case.efg.to_dict(), history, snapshots, summary)
 
 
@@ -162,34 +138,9 @@ def _initial_points(model):
                   stretching=np.zeros((len(nodes), 4)))
 
 
-def _advance(model, points, t0, t1, stats):
-    """One time level, cut back (halved) while it fails."""
-    dt = t1 - t0
-    for cut in range(MAX_CUTS + 1):
-        try:
-            t, current, iterations, residuals = t0, points, 0, []
-            for _ in range(2**cut):
-                with np.errstate(all="ignore"):  # failures end in ConvergenceError
-                    current, its, res = _step(model, current, t, t + dt / 2**cut, stats)
-                t += dt / 2**cut
-                iterations += its
-                residuals.append(res)
-            stats["cutbacks"] += cut
-            stats["newton_iterations"] += iterations
-            stats["max_residual"] = max(stats["max_residual"], *residuals)
-            return current, {"iterations": iterations, "residual": max(residuals),
-                             "substeps": 2**cut}
-        except (ConvergenceError, FloatingPointError) as err:
-            reason = err
-    raise ConvergenceError(f"step t = {t0:g} -> {t1:g} s failed after {MAX_CUTS} halvings "
-                           f"of the time step ({reason}): reduce time steps or loading "
-                           "rate, or check the boundary conditions")
-
-
 def _step(model, points, t0, t1, stats):
     """Newton iterations for one step; returns the new points, iterations, residual."""
-    case, settings = model.case, model.case.efg
-    dt = t1 - t0
+    case, dt = model.case, t1 - t0
     tic = time.perf_counter()
     disc = _discretise(model, points.nodes, np.vstack([points.nodes, points.probes]))
     stats["timings"]["shape_functions_s"] += time.perf_counter() - tic
@@ -202,7 +153,8 @@ def _step(model, points, t0, t1, stats):
     du_bar = prescribed_increment(case.loading.L, disc.bp.points, dt)
     alpha_u, alpha_p = _penalties(model, [0.0, dt]).values()
     fluid = case.fluid
-    traction = (cauchy_traction(np.broadcast_to(model.sigma0, (len(disc.bp.weights), 4)),
+    traction = (cauchy_traction(np.broadcast_to(model.scales.sigma0,
+                                                (len(disc.bp.weights), 4)),
                                 disc.bp.normal)
                 + bc.traction * bc.loaded * case.loading.factor(t1))
     plate_force = case.plate_force(t1)
@@ -251,15 +203,14 @@ def _step(model, points, t0, t1, stats):
         extra_R = []
         if bc.rigid.any():
             extra_R.append(-np.sum(rigid_w * plate_gap) - plate_force)
-        if model.pin_pressure:
+        if model.scales.pin_pressure:
             R_p += c_mean * lam
             extra_R.append(c_mean @ (p - points.p))
         R = np.concatenate([R_u, R_p, extra_R])
-        force, volume = (model.stress_scale * model.h,
-                         model.stress_scale * model.h**2 / model.modulus)
-        residual = max(np.abs(R_u).max() / force, np.abs(R_p).max() / volume,
-                       np.abs(extra_R[:1]).max(initial=0) / force * bc.rigid.any(),
-                       np.abs(extra_R[-1:]).max(initial=0) / volume * model.pin_pressure)
+        sc = model.scales
+        residual = max(np.abs(R_u).max() / sc.force, np.abs(R_p).max() / sc.volume,
+                       np.abs(extra_R[:1]).max(initial=0) / sc.force * bc.rigid.any(),
+                       np.abs(extra_R[-1:]).max(initial=0) / sc.volume * sc.pin_pressure)
         if not np.isfinite(residual):
             raise FloatingPointError("the residual is not finite")
         if residual < TOLERANCE:
@@ -288,7 +239,7 @@ def _step(model, points, t0, t1, stats):
                 disc.bp, constrained, alpha_u)), disc.block("up", up)],
             [disc.block("pu", pu), disc.block("pp", pp) + disc.block("bp", pen_p)]],
             format="csc")
-        K = _bordered(K, disc, n, rigid_w, c_mean, model.pin_pressure)
+        K = _bordered(K, disc, n, rigid_w, c_mean, model.scales.pin_pressure)
         stats["timings"]["assembly_s"] += time.perf_counter() - tic
         tic = time.perf_counter()
         dx = spla.spsolve(K, -R)
@@ -299,7 +250,7 @@ def _step(model, points, t0, t1, stats):
         if bc.rigid.any():
             plate += extra[0]
             extra = extra[1:]
-        if model.pin_pressure:
+        if model.scales.pin_pressure:
             lam += extra[0]
 
     return _finish(model, points, disc, du, p, plate, gap, plate_gap, dt), iteration, residual
@@ -421,28 +372,26 @@ def _reference(A, Finv_a, Finv_b):
 def _penalties(model, times):
     """Penalty factors: displacement (P-wave modulus / h) and pore pressure."""
     case = model.case
+    sc = model.scales
     dt = float(np.max(np.diff(times)))
-    alpha_u = case.efg.penalty * model.modulus / model.h
-    flow = dt * case.fluid.mobility + case.fluid.storage * model.h**2 \
-        + case.fluid.biot_alpha**2 * model.h**2 / model.modulus
-    return {"penalty_alpha_u": alpha_u, "penalty_alpha_p": case.efg.penalty * flow / model.h}
+    flow = (dt * case.fluid.mobility + case.fluid.storage * sc.h**2
+            + case.fluid.biot_alpha**2 * sc.h**2 / sc.modulus)
+    return {"penalty_alpha_u": case.efg.penalty * sc.modulus / sc.h,
+            "penalty_alpha_p": case.efg.penalty * flow / sc.h}
 
 
 def _history_row(model, points, t, dt, info):
     case = model.case
     p, q = invariants(points.stress)
     top = model.loop[model.edges == 3]
-    height = points.nodes[top, 1].mean()
-    L22 = case.loading.L[1, 1]
-    err = (np.mean(np.abs((L22 - points.stretching[:, 1]) / L22)) if L22 != 0 else np.nan)
     probes = {}
     if len(points.probes):
         s = case.efg
         shape = ShapeFunctions.build(points.nodes, points.probes, s.weight_p, s.scale_p)
         probes = {f"p_w@{pr.name}": v for pr, v in zip(case.probes, shape.phi @ points.p)}
     x0 = case.nodes()[top]
-    return {"time": t, "eps_a": -np.log(height / case.geometry.height), "p": p.mean(),
-            "q": q.mean(), "err": err,
+    return {"time": t, "eps_a": axial_strain(case, points.nodes[top, 1]), "p": p.mean(),
+            "q": q.mean(), "err": stretching_error(case, points.stretching[:, 1]),
             "gamma": np.mean(points.nodes[top, 0] - x0[:, 0]) / case.geometry.height,
             "dt": dt, "iterations": info["iterations"], "substeps": info["substeps"],
             "residual": info["residual"], **probes}

@@ -18,11 +18,11 @@ displacement increment ``du`` and ``p_w`` at t_(n+1):
 Newton's method starts from the last step's velocity x dt (``L x`` at the first step) and
 uses :func:`soil.kinematics.spatial_tangent` (material tangent, Jaumann
 rotation, change of area and orientation), pulled back to x_n gradients. Convergence,
-cut-back and scales follow the EFG solver: the displacement residual below ``TOLERANCE``
-times stress scale x spacing, the continuity residual below ``TOLERANCE`` times area x
-stress scale / P-wave modulus; a failing step (no convergence, an element with
-``J <= 0``, a material failure) is halved up to ``MAX_CUTS`` times before the run stops
-with one error naming the step time.
+cut-back and scales are those of :mod:`soil.coupling`, shared with the EFG solver: the
+displacement residual below ``TOLERANCE`` times stress scale x spacing, the continuity
+residual below ``TOLERANCE`` times area x stress scale / P-wave modulus; a failing step
+(no convergence, an element with ``J <= 0``, a material failure) is halved up to
+``MAX_CUTS`` times before the run stops with one error naming the step time.
 
 Essential conditions are exact: fixed and prescribed displacement DOFs
 (``(exp(L dt) - I) x_n`` at the DOF's current position) and drained pressure DOFs
@@ -49,21 +49,18 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from tqdm import tqdm
 
 from fem_reference.assembly import Shapes, block
 from fem_reference.spaces import Space, cell_bases
+from soil.coupling import (MAX_ITERATIONS, TOLERANCE, Scales, axial_strain, march,
+                           stretching_error)
 from soil.errors import ConvergenceError, InputError
 from soil.kinematics import (IDENTITY, in_plane, invariants, prescribed_increment,
                              spatial_tangent, strain_increment)
 from soil.results import Result, Snapshot
 
-TOLERANCE = 1e-8
-MAX_ITERATIONS = 25
-MAX_CUTS = 6
 CONTRACTION = 0.1
 
 
@@ -75,11 +72,7 @@ class Model:
     method: str
     material: object
     space: Space
-    sigma0: np.ndarray       # (4,) initial total stress
-    h: float                 # smallest nodal spacing [m]
-    stress_scale: float
-    modulus: float           # P-wave modulus at the initial state
-    pin_pressure: bool
+    scales: Scales
     constraints: object
     probes: object           # (P, n_p) pressure basis at the probes (reference coords)
 
@@ -90,26 +83,17 @@ class Model:
                              f" is {case.analysis!r}: use --method efg")
         material = case.material()
         space = Space.build(case, method)
-        stress, state = material.initial_state(1)
-        K, G = (material.moduli(-stress[0, :3].mean(), state["v"][0])
-                if hasattr(material, "moduli") else (material.K, material.G))
-        sigma0 = stress[0] - case.fluid.biot_alpha * case.initial_pore_pressure * IDENTITY
-        edges = [edge for _, edge in case.boundary.items()]
-        tractions = [abs(np.asarray(e.traction, float)).max() for e in edges
-                     if e.traction != "exact"]
-        scale = max([abs(stress[0]).max(), *tractions, 1e-12])
-        free = any("free" in (e.ux, e.uy) or "rigid" in (e.ux, e.uy) for e in edges)
-        pin = case.fluid.storage == 0 and not free and not any(e.drained for e in edges)
         _, pb = cell_bases(space.mesh0, space.pair)
         points = np.array([p.point for p in case.probes]).reshape(-1, 2)
-        return cls(case, method, material, space, sigma0, float(min(case.spacing)), scale,
-                   float(K + 4 * G / 3), pin, Constraints.build(case, space),
+        return cls(case, method, material, space, Scales.of(case, material),
+                   Constraints.build(case, space),
                    pb.probes(points.T) if len(points) else None)
 
     @property
     def beta(self):
         """Stabilisation ``h^2 / (4 M)`` of fem-p1p1-stab [m2/kPa], else 0."""
-        return self.h**2 / (4 * self.modulus) if self.space.pair.stabilised else 0.0
+        sc = self.scales
+        return sc.h**2 / (4 * sc.modulus) if self.space.pair.stabilised else 0.0
 
 
 @dataclass
@@ -203,24 +187,18 @@ def solve(case, method="fem-th", progress=True):
         A static case, or a quadrilateral method on a ``grid+centres`` case.
     """
     model = Model.build(case, method)
-    current = _initial_state(model)
-    times = case.times()
-    rows, snapshots = [], [_snapshot(model, current, 0.0)]
-    stats = {"newton_iterations": 0, "factorisations": 0, "cutbacks": 0,
-             "max_residual": 0.0, "timings": {"assembly_s": 0.0, "solve_s": 0.0,
-                                              "material_s": 0.0}}
+    stats = {"factorisations": 0,
+             "timings": {"assembly_s": 0.0, "solve_s": 0.0, "material_s": 0.0}}
     tic = time.perf_counter()
-    for t0, t1 in tqdm(list(zip(times[:-1], times[1:])), desc=f"{method} {case.name}",
-                       unit="step", disable=not progress or None, leave=False):
-        current, info = _advance(model, current, t0, t1, stats)
-        rows.append(_history_row(model, current, t1, t1 - t0, info))
-        snapshots.append(_snapshot(model, current, t1))
+    history, snapshots = march(
+        case, _initial_state(model),
+        step=lambda current, t0, t1: _step(model, current, t0, t1, stats),
+        row=lambda current, t, dt, info: _history_row(model, current, t, dt, info),
+        snapshot=lambda current, t: _snapshot(model, current, t),
+        stats=stats, progress=progress, desc=f"{method} {case.name}")
     stats["timings"]["total_s"] = time.perf_counter() - tic
-    history = pd.DataFrame(rows)
-    if history["err"].isna().all():
-        history["err"] = None
     space = model.space
-    summary = {"steps": len(times) - 1, "dofs": int(2 * space.n_u + space.n_p),
+    summary = {"steps": len(history), "dofs": int(2 * space.n_u + space.n_p),
                "elements": int(space.mesh0.t.shape[1]), "tolerance": TOLERANCE,
                "linear_solver": "scipy.sparse.linalg.splu", "stabilisation_beta": model.beta,
                **stats}
@@ -241,29 +219,6 @@ def _initial_state(model):
                  velocity=(case.loading.L @ ub.doflocs).ravel())
 
 
-def _advance(model, current, t0, t1, stats):
-    """One time level, cut back (halved) while it fails."""
-    dt = t1 - t0
-    for cut in range(MAX_CUTS + 1):
-        try:
-            t, trial, iterations, residuals = t0, current, 0, []
-            for _ in range(2**cut):
-                trial, its, res = _step(model, trial, t, t + dt / 2**cut, stats)
-                t += dt / 2**cut
-                iterations += its
-                residuals.append(res)
-            stats["cutbacks"] += cut
-            stats["newton_iterations"] += iterations
-            stats["max_residual"] = max(stats["max_residual"], *residuals)
-            return trial, {"iterations": iterations, "residual": max(residuals),
-                           "substeps": 2**cut}
-        except (ConvergenceError, FloatingPointError) as err:
-            reason = err
-    raise ConvergenceError(f"step t = {t0:g} -> {t1:g} s failed after {MAX_CUTS} halvings "
-                           f"of the time step ({reason}): reduce time steps or loading "
-                           "rate, or check the boundary conditions")
-
-
 @dataclass
 class _Discretisation:
     """Bases of the current mesh: shape data, quadrature weights, external forces."""
@@ -281,7 +236,7 @@ def _discretise(model, vertices, t1):
     ub, pb = cell_bases(mesh, space.pair)
     external = np.zeros(2 * space.n_u)
     factor = model.case.loading.factor(t1)
-    sigma0 = in_plane(model.sigma0[None])[0]
+    sigma0 = in_plane(model.scales.sigma0[None])[0]
     for name, edge in model.case.boundary.items():
         if len(space.edge_facets[name]) == 0:
             continue
@@ -297,7 +252,7 @@ def _discretise(model, vertices, t1):
 def _step(model, current, t0, t1, stats):
     """Newton iterations for one step; returns the new state, iterations, residual."""
     case, space, con = model.case, model.space, model.constraints
-    fluid, dt = case.fluid, t1 - t0
+    dt = t1 - t0
     tic = time.perf_counter()
     disc = _discretise(model, current.vertices, t1)
     stats["timings"]["assembly_s"] += time.perf_counter() - tic
@@ -310,8 +265,7 @@ def _step(model, current, t0, t1, stats):
     c_mean = np.zeros(len(x))
     c_mean[2 * n_u:] = disc.p.vector(disc.dx[..., None, None] * [1.0, 0, 0])
     lam, lu, previous = 0.0, None, np.inf
-    force = model.stress_scale * model.h
-    volume = model.stress_scale * model.h**2 / model.modulus
+    sc = model.scales
     dw_u = disc.dx.ravel()
     for iteration in range(1, MAX_ITERATIONS + 1):
         grads = disc.u.values(x[:2 * n_u].reshape(2, n_u))[..., 1:].reshape(E * Q, 2, 2)
@@ -330,7 +284,7 @@ def _step(model, current, t0, t1, stats):
         if len(con.plate):
             reduced[-1] -= case.plate_force(t1)
         pin = c_mean @ (x - np.concatenate([np.zeros(2 * n_u), current.p]))
-        residual = _norm(reduced, con, force, volume, model.pin_pressure * pin)
+        residual = _norm(reduced, con, sc.force, sc.volume, sc.pin_pressure * pin)
         if not np.isfinite(residual):
             raise FloatingPointError("the residual is not finite")
         if residual < TOLERANCE:
@@ -342,16 +296,16 @@ def _step(model, current, t0, t1, stats):
                 or residual > CONTRACTION * previous:
             tic = time.perf_counter()
             K = _tangent(model, disc, stress, total, tangent, wJ, Finv, dt)
-            lu = _factorise(con.T.T @ K @ con.T, con.T.T @ c_mean, model.pin_pressure)
+            lu = _factorise(con.T.T @ K @ con.T, con.T.T @ c_mean, sc.pin_pressure)
             stats["factorisations"] += 1
             stats["timings"]["assembly_s"] += time.perf_counter() - tic
         previous = residual
         tic = time.perf_counter()
-        rhs = np.append(reduced, pin) if model.pin_pressure else reduced
+        rhs = np.append(reduced, pin) if sc.pin_pressure else reduced
         dz = -lu.solve(rhs)
         stats["timings"]["solve_s"] += time.perf_counter() - tic
         x += con.T @ dz[:con.T.shape[1]]
-        if model.pin_pressure:
+        if sc.pin_pressure:
             lam += dz[-1]
 
     n_v = len(current.vertices)
@@ -427,16 +381,12 @@ def _history_row(model, current, t, dt, info):
     p, q = invariants(current.stress)
     w = current.weights / current.weights.sum()
     top = model.space.mesh0.p[1] > case.geometry.height * (1 - 1e-9)
-    height = current.vertices[top, 1].mean()
-    L22 = case.loading.L[1, 1]
-    err = (np.sum(w * np.abs((L22 - current.stretching[:, 1]) / L22)) if L22 != 0
-           else np.nan)
     probes = {}
     if model.probes is not None:
         probes = {f"p_w@{pr.name}": v for pr, v in zip(case.probes, model.probes @ current.p)}
     x0 = model.space.mesh0.p[0, top]
-    return {"time": t, "eps_a": -np.log(height / case.geometry.height), "p": w @ p,
-            "q": w @ q, "err": err,
+    return {"time": t, "eps_a": axial_strain(case, current.vertices[top, 1]), "p": w @ p,
+            "q": w @ q, "err": stretching_error(case, current.stretching[:, 1], w),
             "gamma": np.mean(current.vertices[top, 0] - x0) / case.geometry.height,
             "dt": dt, "iterations": info["iterations"], "substeps": info["substeps"],
             "residual": info["residual"], **probes}

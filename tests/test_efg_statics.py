@@ -1,7 +1,6 @@
 """Static EFG elasticity: assembly, patch test, cantilever convergence, bad supports."""
 
 import numpy as np
-import pytest
 import scipy.sparse as sp
 
 from comparisons.cli import main
