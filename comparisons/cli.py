@@ -23,6 +23,7 @@ def main(argv=None):
 
 
 def _parser():
+    from comparisons.runner import METHODS
     from soil.driver import TESTS
 
     parser = argparse.ArgumentParser(
@@ -102,29 +103,13 @@ def _show(args):
 
 
 def _run(args):
+    from comparisons.runner import METHODS
     from soil.problems import load_case
 
     case = load_case(args.case, args.set)
     result = METHODS[args.method](case)
     result.write(args.out)
     print(f"wrote {args.out}: {json_line(result.summary)}")
-
-
-def _efg(case, progress=True):
-    if case.analysis == "static":
-        from efg.statics import solve
-
-        return solve(case)
-    from efg.solver import solve
-
-    return solve(case, progress=progress)
-
-
-#: Solvers by method name: ``case -> Result``.
-METHODS = {"efg": _efg,
-           **{name: (lambda case, progress=True, name=name: __import__(
-               "fem_reference.solver", fromlist=["solve"]).solve(case, name, progress))
-              for name in ("fem-th", "fem-p1p1", "fem-p1p1-stab", "fem-q1q1", "fem-q2q1")}}
 
 
 def json_line(summary):

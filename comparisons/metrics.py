@@ -133,3 +133,36 @@ def mandel_errors(result):
     return {"max_error": float(np.abs(ours - exact).max() / p0),
             "peak_centre": float(ours[:, 0].max() / p0),
             "peak_centre_exact": float(exact[:, 0].max() / p0)}
+
+
+def moose_errors(result, moose):
+    """A Terzaghi run against MOOSE's file (peer-data case A), scaled by the load.
+
+    Parameters
+    ----------
+    result : Result
+        A run of the built-in ``terzaghi`` case on MOOSE's time levels.
+    moose : pandas.DataFrame
+        ``moose_poromech_terzaghi_Q1Q1_consistent.csv`` (load 1).
+
+    Returns
+    -------
+    dict
+        ``pressure_after_0.1``: ``max |p/load - p_moose|`` for t >= 0.1 over p0/load;
+        ``settlement_after_0.1``: largest relative settlement difference for t >= 0.1.
+    """
+    case, h = result.case, result.history
+    load = -case.boundary.top.traction[1]
+    if not np.allclose(h.time, moose.time, rtol=1e-9):
+        raise ValueError("the run is not on MOOSE's time levels")
+    columns = [f"p{k}" for k in range(10)]
+    p = h[[f"p_w@{c}" for c in columns]].to_numpy(float) / load
+    material, fluid = case.material(), case.fluid
+    modulus = material.K + 4 * material.G / 3
+    p0 = fluid.biot_alpha / modulus / (fluid.storage + fluid.biot_alpha**2 / modulus)
+    late = h.time.to_numpy() >= 0.1
+    settle = case.geometry.height * (1 - np.exp(-h.eps_a.to_numpy())) / load
+    return {"pressure_after_0.1": float(np.abs(p - moose[columns].to_numpy())[late].max()
+                                        / p0),
+            "settlement_after_0.1": float(np.abs(settle / -moose.zdisp.to_numpy() - 1)[late]
+                                          .max())}

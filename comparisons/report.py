@@ -32,6 +32,12 @@ def make_report(root="reports"):
         ("Terzaghi and Mandel (EFG)",
          lambda: tables.write(verification.consolidation(),
                               root / "tables" / "efg_consolidation")),
+        ("FEM Terzaghi (vs MOOSE and closed form)",
+         lambda: tables.write(verification.fem_terzaghi(moose=peers.moose_terzaghi()),
+                              root / "tables" / "fem_terzaghi")),
+        ("FEM soil column stability",
+         lambda: tables.write(verification.fem_soil_column(),
+                              root / "tables" / "fem_soil_column")),
         ("stress paths (driver)",
          lambda: [figures.stress_paths_driver(root / "figures" / "stress_paths_driver.png")]),
     ]

@@ -24,6 +24,7 @@ from pathlib import Path
 import pandas as pd
 from tqdm import tqdm
 
+from fem_reference.spaces import PAIRS
 from soil.errors import SoilwaterError
 from soil.problems import load_case
 
@@ -62,10 +63,33 @@ class Outcome:
         return self.error is None
 
 
+def _efg(case, progress=True):
+    """EFG: static elasticity for ``analysis = "static"``, else the coupled solver."""
+    if case.analysis == "static":
+        from efg.statics import solve
+
+        return solve(case)
+    from efg.solver import solve
+
+    return solve(case, progress=progress)
+
+
+def _fem(method):
+    """The scikit-fem reference with one element pair."""
+    def solve(case, progress=True):
+        from fem_reference.solver import solve
+
+        return solve(case, method, progress)
+
+    return solve
+
+
+#: Solvers by method name: ``(case, progress=True) -> Result``.
+METHODS = {"efg": _efg, **{name: _fem(name) for name in PAIRS}}
+
+
 def solver(method):
     """The solver of a method name: ``case -> Result``."""
-    from comparisons.cli import METHODS
-
     if method not in METHODS:
         raise SoilwaterError(f"unknown method {method!r}: use one of {', '.join(METHODS)}")
     return METHODS[method]

@@ -10,8 +10,8 @@ import itertools
 import numpy as np
 import pandas as pd
 
-from comparisons.metrics import (axis_profile, mandel_errors, oscillation_index, overshoot,
-                                 terzaghi_errors)
+from comparisons.metrics import (axis_profile, mandel_errors, moose_errors,
+                                 oscillation_index, overshoot, terzaghi_errors)
 from comparisons import runner
 from efg.statics import solve
 from soil.driver import run_test
@@ -137,16 +137,72 @@ def soil_column(permeabilities=(1e-5, 1e-7), densities=(11, 21, 41),
     return pd.DataFrame(rows)
 
 
-def _results(specs, method="efg"):
-    """Results of ``(case, overrides)`` runs through the parallel, cached runner.
+#: The scikit-fem reference methods.
+FEM_METHODS = ("fem-th", "fem-p1p1", "fem-p1p1-stab", "fem-q1q1", "fem-q2q1")
+
+
+def fem_soil_column(ratios=(3, 30, 300), methods=FEM_METHODS):
+    """First-step stability of the FEM soil column at first steps with these
+    ``h^2 / (c_v dt)`` (the built-in column, 3 x 21 vertices).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``ratio, dt, method, overshoot, oscillation`` (axis profile, over the load).
+    """
+    base = load_case("soil-column")
+    dts = [float(base.times()[1] * stability_number(base) / ratio) for ratio in ratios]
+    settings = list(itertools.product(zip(ratios, dts), methods))
+    results = _results([("soil-column", (f"time.end={dt!r}", "time.steps=1"), method)
+                        for (_, dt), method in settings])
+    rows = []
+    for ((ratio, dt), method), result in zip(settings, results):
+        p = axis_profile(result, 1)[1]
+        load = -result.case.boundary.top.traction[1]
+        rows.append({"ratio": ratio, "dt": dt, "method": method,
+                     "overshoot": overshoot(p, load),
+                     "oscillation": oscillation_index(p, load)})
+    return pd.DataFrame(rows)
+
+
+def fem_terzaghi(methods=FEM_METHODS, moose=None):
+    """Terzaghi with every FEM pair on MOOSE's steps, and on steps capped at 0.01.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``method, steps`` (``moose`` or ``dt<=0.01``), the errors of
+        :func:`comparisons.metrics.terzaghi_errors` and, on MOOSE's steps with ``moose``
+        given, those of :func:`comparisons.metrics.moose_errors`.
+    """
+    steps = {"moose": (), "dt<=0.01": ("time.dt_max=0.01", "time.end=2.0")}
+    settings = list(itertools.product(steps, methods))
+    results = _results([("terzaghi", steps[label], method) for label, method in settings])
+    rows = []
+    for (label, method), result in zip(settings, results):
+        errors = terzaghi_errors(result)
+        row = {"method": method, "steps": label,
+               "error_p0_after_0.1": max(v for k, v in errors["window_errors"].items()
+                                         if not k.startswith(("0 ", "0.01 "))),
+               "settlement_after_0.1": errors["settlement_error_after_0.1"],
+               "overshoot": errors["overshoot"]}
+        if moose is not None and label == "moose":
+            row.update({f"moose_{k}": v for k, v in moose_errors(result, moose).items()})
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _results(specs):
+    """Results of ``(case, overrides[, method])`` runs (method default ``efg``) through
+    the parallel, cached runner.
 
     Raises
     ------
     SoilwaterError
         If any run failed (a verification table needs them all).
     """
-    outcomes = runner.run([runner.Job(case, method, tuple(o)) for case, o in specs],
-                          progress=False)
+    outcomes = runner.run([runner.Job(spec[0], spec[2] if len(spec) > 2 else "efg",
+                                      tuple(spec[1])) for spec in specs], progress=False)
     failed = [o for o in outcomes if not o.ok]
     if failed:
         raise SoilwaterError(f"{len(failed)} verification run(s) failed, first: "

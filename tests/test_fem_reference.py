@@ -6,7 +6,9 @@ import pandas as pd
 import pytest
 
 from comparisons.cli import main
-from comparisons.metrics import axis_profile, oscillation_index, overshoot, path_error
+from comparisons.metrics import moose_errors, overshoot, path_error
+from comparisons.peers import moose_terzaghi
+from comparisons.verification import fem_soil_column
 from fem_reference.solver import solve
 from soil.analytical import mandel, terzaghi
 from soil.errors import InputError
@@ -34,13 +36,12 @@ def _terzaghi_run(method, overrides=()):
 
 
 def test_q1q1_reproduces_moose_terzaghi(peer):
-    moose = pd.read_csv(peer / "moose_poromech_terzaghi_Q1Q1_consistent.csv")
-    t, p, settlement, _, _, p0 = _terzaghi_run("fem-q1q1")
-    np.testing.assert_allclose(t, moose.time, rtol=1e-9)
-    late = t >= 0.1
-    ref = moose[[f"p{k}" for k in HEIGHTS.astype(int)]].to_numpy()
-    assert np.abs(p - ref)[late].max() < 0.01 * p0
-    assert np.abs(settlement / -moose.zdisp.to_numpy() - 1)[late].max() < 0.005
+    moose = moose_terzaghi(peer)
+    result = solve(load_case("terzaghi"), "fem-q1q1", progress=False)
+    errors = moose_errors(result, moose)
+    assert errors["pressure_after_0.1"] < 0.01
+    assert errors["settlement_after_0.1"] < 0.005
+    _, p, _, _, _, p0 = _terzaghi_run("fem-q1q1")
     assert overshoot(p[0], p0) > 0.2  # MOOSE: +0.38
 
 
@@ -79,25 +80,8 @@ def test_mandel_rigid_plate_carries_the_load():
     assert h["p_w@centre"].max() > 1.05 * force / 2  # Mandel-Cryer effect
 
 
-def _column_table():
-    base = load_case("soil-column")
-    mat = base.material()
-    stress, state = mat.initial_state(1)
-    K, G = mat.moduli(-stress[0, :3].mean(), state["v"][0])
-    cv, h = base.fluid.mobility * (K + 4 * G / 3), min(base.spacing)
-    rows = []
-    for ratio in (3, 30, 300):
-        case = load_case("soil-column", [f"time.end={float(h * h / (cv * ratio))!r}",
-                                         "time.steps=1"])
-        for method in ("fem-th", "fem-p1p1", "fem-p1p1-stab", "fem-q1q1", "fem-q2q1"):
-            _, p = axis_profile(solve(case, method, progress=False), 1)
-            rows.append({"ratio": ratio, "method": method, "overshoot": overshoot(p, 1.0),
-                         "oscillation": oscillation_index(p, 1.0)})
-    return pd.DataFrame(rows)
-
-
 def test_column_first_step_stability_table():
-    table = _column_table()
+    table = fem_soil_column()
     print("\nh^2/(c_v dt), method, overshoot, oscillation index (first step, axis)")
     print(table.to_string(index=False, float_format="%.3f"))
     worst = table[table.ratio == 300].set_index("method").oscillation
