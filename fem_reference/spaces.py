@@ -66,12 +66,13 @@ def initial_mesh(case, method):
             raise InputError(f"--method {method} needs discretisation.layout = 'grid' "
                              f"(quadrilaterals on the grid), case {case.name!r} has "
                              f"{d.layout!r}: use fem-th, fem-p1p1 or fem-p1p1-stab")
-        return MeshQuad(nodes.T, np.array([k, k + 1, k + 1 + d.nx, k + d.nx]))
+        return MeshQuad(np.ascontiguousarray(nodes.T),
+                        np.ascontiguousarray([k, k + 1, k + 1 + d.nx, k + d.nx]))
     if d.layout == "grid":
         t = np.hstack([[k, k + 1, k + 1 + d.nx], [k, k + 1 + d.nx, k + d.nx]])
     else:
         t = Delaunay(nodes).simplices.T
-    return MeshTri(nodes.T, t)
+    return MeshTri(np.ascontiguousarray(nodes.T), np.ascontiguousarray(t))
 
 
 @dataclass
