@@ -1,4 +1,5 @@
-"""The ``soilwater`` command: ``list``, ``show``, ``run``, ``path``, ``report``, ``bench``.
+"""The ``soilwater`` command: ``list``, ``show``, ``run``, ``path``, ``report``, ``check``,
+``bench``.
 
 Errors the user can fix (bad input, a run that cannot converge) print one line,
 ``soilwater: error: ...``, and exit with status 2; nothing is written.
@@ -15,11 +16,10 @@ def main(argv=None):
     parser = _parser()
     args = parser.parse_args(argv)
     try:
-        args.func(args)
+        return args.func(args) or 0
     except SoilwaterError as err:
         print(f"soilwater: error: {err}", file=sys.stderr)
         return 2
-    return 0
 
 
 def _parser():
@@ -63,6 +63,12 @@ def _parser():
     p.add_argument("--points", type=int, default=200, help="output rows (default 200)")
     p.add_argument("--out", required=True, help="CSV file: step, eps_a, eps_v, p, q, pc")
     p.set_defaults(func=_path)
+
+    p = sub.add_parser("check", help="rerun the fast subset and compare with "
+                       "reports/reference/ (exit 1 on a regression)")
+    p.add_argument("--update", action="store_true",
+                   help="rewrite the reference tables instead (commit them deliberately)")
+    p.set_defaults(func=_check)
 
     p = sub.add_parser("bench", help="speed ratios against scikit-fem (writes "
                        "reports/bench.md)")
@@ -132,6 +138,22 @@ def _path(args):
     table = run_test(material, args.test, args.strain, points=args.points)
     write_csv(table, args.out)
     print(f"wrote {args.out} ({len(table)} rows)")
+
+
+def _check(args):
+    from comparisons.check import check, update
+
+    if args.update:
+        for path in update():
+            print(f"wrote {path}")
+        return 0
+    failures = 0
+    for name, lines in check().items():
+        print(f"{name}: {'ok' if not lines else f'{len(lines)} difference(s)'}")
+        for line in lines:
+            print(f"  {line}")
+        failures += len(lines)
+    return 1 if failures else 0
 
 
 def _bench(args):
