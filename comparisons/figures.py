@@ -188,31 +188,48 @@ def efg_convergence(table, path):
     return path
 
 
-def unconfined_compression(table, path):
-    """Paper Figs. 4 and 6: EFG stress paths against the driver, and ERR against strain.
+def stress_paths(table, path):
+    """Paper Fig. 4: q/p'0 against p'/p'0 of every run and the driver, one panel per case.
 
-    ``table`` is :func:`comparisons.verification.unconfined_compression`.
+    ``table`` is :func:`comparisons.verification.stress_paths`.
     """
-    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.4), constrained_layout=True)
-    first = table[(table.cells == table.cells.iloc[0])
-                  & (table.correction == table.correction.iloc[0])]
-    left.plot(first.p_driver, first.q_driver, "k-", lw=3, alpha=0.35,
-              label="stress-point driver (theory)")
-    styles = {"delaunay": "-", "squares": "--"}
-    colours = {"vci": "C0", "none": "C3"}
-    for (cells, correction), group in table.groupby(["cells", "correction"], sort=False):
-        label = f"EFG, {cells} cells, {'VCI' if correction == 'vci' else 'plain Gauss'}"
-        left.plot(group.p, group.q, styles[cells], color=colours[correction], lw=1.4,
-                  label=label)
-        right.semilogy(group.eps_a * 100, group.err.clip(lower=1e-12), styles[cells],
-                       color=colours[correction], lw=1.4, label=label)
-    left.set(xlabel="p'/p'$_0$", ylabel="q/p'$_0$", xlim=(0.45, 1.05), ylim=(0, 0.85),
-             title="Unconfined compression (111 nodes): stress path")
-    right.set(xlabel="axial strain (%)", ylabel="ERR (paper eq. 1)",
-              title="Error of the nodal stretching D$_{22}$")
-    for ax in (left, right):
-        ax.grid(alpha=0.3, which="both")
-    left.legend(fontsize=8, loc="upper right")
+    cases = list(dict.fromkeys(table.case))
+    fig, axes = plt.subplots(1, len(cases), figsize=(5.6 * len(cases), 4.8),
+                             constrained_layout=True, squeeze=False)
+    for ax, case in zip(axes[0], cases):
+        part = table[table.case == case]
+        first = part[part.run == part.run.iloc[0]]
+        ax.plot(np.r_[1.0, first.p_driver], np.r_[0.0, first.q_driver], "k-", lw=4,
+                alpha=0.3, label="stress-point driver (theory)")
+        for k, (run, group) in enumerate(part.groupby("run", sort=False)):
+            ax.plot(np.r_[1.0, group.p], np.r_[0.0, group.q], lw=1.3, label=run, **_style(k))
+        ax.set(xlabel="p'/p'$_0$", ylabel="q/p'$_0$", xlim=(0.45, 1.05), ylim=(0, 0.85),
+               title=f"{case}: stress path (nodal or domain averages)")
+        ax.grid(alpha=0.3)
+    axes[0][-1].legend(fontsize=8, loc="upper right")
     fig.savefig(path, dpi=150)
     plt.close(fig)
     return path
+
+
+def err_history(table, path, case="unconfined-compression"):
+    """Paper Fig. 6: ERR (eq. 1) against axial strain for every run of ``case``."""
+    part = table[table.case == case]
+    fig, ax = plt.subplots(figsize=(6.6, 4.6), constrained_layout=True)
+    for k, (run, group) in enumerate(part.groupby("run", sort=False)):
+        ax.semilogy(group.strain * 100, group.err.clip(lower=1e-12), lw=1.3, label=run,
+                    **_style(k))
+    ax.set(xlabel="axial strain (%)", ylabel="ERR (paper eq. 1), floor 1e-12",
+           title="Unconfined compression: error of the nodal stretching D$_{22}$")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def _style(k):
+    """Line style of the k-th run: colours for cells/methods, dashes for variants."""
+    ls, color = [("-", "C0"), ("--", "C1"), (":", "C0"), (":", "C1"), ("-", "C2"),
+                 ("-.", "C3")][k % 6]
+    return {"ls": ls, "color": color}

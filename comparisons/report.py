@@ -26,7 +26,7 @@ def make_report(root="reports"):
         ("patch test", lambda: tables.write(verification.patch_test(),
                                             root / "tables" / "patch_test")),
         ("cantilever convergence", lambda: _convergence(root)),
-        ("unconfined compression (Figs. 4, 6)", lambda: _unconfined(root)),
+        ("stress paths (Figs. 4, 6)", lambda: _paths(root)),
         ("soil column stability (Table 2, EFG)",
          lambda: tables.write(verification.soil_column(), root / "tables" / "table2_efg")),
         ("Terzaghi and Mandel (EFG)",
@@ -55,9 +55,10 @@ def _convergence(root):
             figures.efg_convergence(vci, root / "figures" / "efg_convergence.png")]
 
 
-def _unconfined(root):
-    table = verification.unconfined_compression()
-    return [*tables.write(table, root / "tables" / "efg_unconfined"),
+def _paths(root):
+    table = verification.stress_paths()
+    return [*tables.write(table, root / "tables" / "stress_paths"),
             *tables.write(verification.path_summary(table),
-                          root / "tables" / "efg_unconfined_summary"),
-            figures.unconfined_compression(table, root / "figures" / "unconfined_efg.png")]
+                          root / "tables" / "stress_paths_summary"),
+            figures.stress_paths(table, root / "figures" / "fig4_stress_paths.png"),
+            figures.err_history(table, root / "figures" / "fig6_err.png")]

@@ -64,38 +64,52 @@ def cantilever_convergence(levels=((13, 4), (25, 7), (49, 13), (97, 25)),
     return pd.DataFrame(rows)
 
 
-def unconfined_compression(cells=CELLS, corrections=("vci", "none"), steps=100):
-    """EFG unconfined compression beside the stress-point driver, per step.
+#: The runs of the paper's Figs. 4 and 6: label -> (method, overrides).
+PATH_RUNS = {
+    "EFG, Delaunay cells": ("efg", ("efg.cells=delaunay",)),
+    "EFG, square cells": ("efg", ("efg.cells=squares",)),
+    "EFG, Delaunay, plain Gauss": ("efg", ("efg.cells=delaunay", "efg.correction=none")),
+    "EFG, squares, plain Gauss": ("efg", ("efg.cells=squares", "efg.correction=none")),
+    "FEM Taylor-Hood (fem-th)": ("fem-th", ()),
+    "FEM P1/P1 (fem-p1p1)": ("fem-p1p1", ()),
+}
+#: The paper's two homogeneous tests and the driver test with the same stretching.
+PATH_CASES = {"unconfined-compression": "undrained-plane-strain",
+              "simple-shear": "undrained-simple-shear"}
+
+
+def stress_paths(cases=tuple(PATH_CASES), runs=PATH_RUNS):
+    """Each run of each case beside the stress-point driver, per step (paper Figs. 4, 6).
 
     Returns
     -------
     pandas.DataFrame
-        Long format: ``cells, correction, time, eps_a, p, q, err`` (p', q over p'0, ERR of
-        paper eq. 1) and the driver's ``p_driver, q_driver`` at the same axial strain.
+        Long format: ``case, run, time, strain`` (axial, or shear for simple shear),
+        ``p, q`` (p', q over p'0), ``err`` (paper eq. 1, NaN where undefined) and the
+        driver's ``p_driver, q_driver`` at the same strain.
     """
-    settings = list(itertools.product(cells, corrections))
-    outcomes = _results([("unconfined-compression", ("efg.cells=" + cell,
-                                                     "efg.correction=" + correction,
-                                                     f"time.steps={steps}"))
-                         for cell, correction in settings])
+    settings = list(itertools.product(cases, runs.items()))
+    results = _results([(case, overrides, method)
+                        for case, (_, (method, overrides)) in settings])
     frames = []
-    for (cell, correction), result in zip(settings, outcomes):
+    for (case, (label, _)), result in zip(settings, results):
         history, clay = result.history, result.case.material()
-        driver = run_test(clay, "undrained-plane-strain", float(history.eps_a.max()), 2000)
+        strain = history["gamma" if case == "simple-shear" else "eps_a"]
+        driver = run_test(clay, PATH_CASES[case], float(strain.max()), 2000)
         frames.append(pd.DataFrame({
-            "cells": cell, "correction": correction, "time": history.time,
-            "eps_a": history.eps_a, "p": history.p / clay.p0, "q": history.q / clay.p0,
+            "case": case, "run": label, "time": history.time, "strain": strain,
+            "p": history.p / clay.p0, "q": history.q / clay.p0,
             "err": history.err.astype(float),
-            "p_driver": np.interp(history.eps_a, driver.eps_a, driver.p) / clay.p0,
-            "q_driver": np.interp(history.eps_a, driver.eps_a, driver.q) / clay.p0}))
+            "p_driver": np.interp(strain, driver.eps_a, driver.p) / clay.p0,
+            "q_driver": np.interp(strain, driver.eps_a, driver.q) / clay.p0}))
     return pd.concat(frames, ignore_index=True)
 
 
 def path_summary(table):
-    """Largest path error (over p'0) and ERR statistics per (cells, correction)."""
+    """Largest path error (over p'0) and ERR statistics per case and run."""
     gap = np.maximum(np.abs(table.p - table.p_driver), np.abs(table.q - table.q_driver))
     return (table.assign(path_error=gap)
-            .groupby(["cells", "correction"], sort=False)
+            .groupby(["case", "run"], sort=False)
             .agg(path_error=("path_error", "max"), err_mean=("err", "mean"),
                  err_max=("err", "max"), err_final=("err", "last"))
             .reset_index())
