@@ -233,3 +233,76 @@ def _style(k):
     ls, color = [("-", "C0"), ("--", "C1"), (":", "C0"), (":", "C1"), ("-", "C2"),
                  ("-.", "C3")][k % 6]
     return {"ls": ls, "color": color}
+
+
+def column_profiles(table, path):
+    """Pore pressure along the column after the first step, one panel per run."""
+    runs = list(dict.fromkeys(table.run))
+    cols = 4
+    rows = -(-len(runs) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 4.2 * rows), sharey=True,
+                             constrained_layout=True, squeeze=False)
+    for ax, run in zip(axes.flat, runs):
+        part = table[table.run == run]
+        ax.plot(part.reference, part.y, "k-", lw=3, alpha=0.3, label="Terzaghi, initial "
+                "stiffness")
+        ax.plot(part.p_w, part.y, "o-", ms=3, color="C3", label="p$_w$ on the axis")
+        ax.set(title=run, xlabel="p$_w$ / load", xlim=(-0.6, 2.2))
+        ax.axvline(1.0, color="k", lw=0.5, ls=":")
+        ax.grid(alpha=0.3)
+    for ax in axes.flat[len(runs):]:
+        ax.set_visible(False)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("height y (m)")
+    axes.flat[0].legend(fontsize=7, loc="lower left")
+    fig.suptitle("Soil column (paper Fig. 8), first step of 40 s: h$^2$/(c$_v$ dt) = 30")
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def consolidation(terzaghi_table, mandel_table, path, times=(0.1, 0.5, 1.0, 3.0)):
+    """Verification: Terzaghi isochrones and Mandel's centre pressure, EFG and FEM.
+
+    Tables from :func:`comparisons.verification.consolidation_histories`.
+    """
+    from soil.analytical import terzaghi as series
+    from soil.problems import load_case
+
+    case = load_case("terzaghi")
+    material, fluid, height = case.material(), case.fluid, case.geometry.height
+    args = (height, material.K + 4 * material.G / 3, fluid.biot_alpha, fluid.storage,
+            fluid.mobility)
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.6), constrained_layout=True)
+    y = np.linspace(0, height, 101)
+    mv = 1 / args[1]
+    p0 = fluid.biot_alpha * mv / (fluid.storage + fluid.biot_alpha**2 * mv)  # unit load
+    markers = {"EFG (5 x 41 nodes)": "o", "fem-q1q1": "s", "fem-th": "^",
+               "MOOSE Q1/Q1 (peer)": "x"}
+    for k, t in enumerate(times):
+        exact, _ = series(y, t, 1.0, *args)
+        left.plot(exact / p0, y, "-", color=f"C{k}", lw=2, alpha=0.4,
+                  label=f"closed form, t = {t:g}")
+        for run, marker in markers.items():
+            part = terzaghi_table[terzaghi_table.run == run]
+            nearest = part.time.iloc[np.argmin(np.abs(part.time.to_numpy() - t))]
+            at = part[part.time == nearest]
+            left.plot(at.p, at.y, marker, color=f"C{k}", ms=4, mfc="none",
+                      label=run if k == 0 else None)
+    left.set(xlabel="p$_w$ / p$_0$ (undrained)", ylabel="height above the base (m)",
+             title="Terzaghi (peer case A): isochrones")
+    left.legend(fontsize=7, loc="lower left")
+    for k, (run, part) in enumerate(mandel_table.groupby("run", sort=False)):
+        right.semilogx(part.time, part.p_centre, ["o", "s", "^"][k % 3], ms=3, mfc="none",
+                       label=run)
+    first = mandel_table[mandel_table.run == mandel_table.run.iloc[0]]
+    right.semilogx(first.time, first.p_exact, "k-", lw=2, alpha=0.5, label="closed form")
+    right.axhline(1.0, color="k", lw=0.5, ls=":")
+    right.set(xlabel="time (s)", ylabel="p$_w$ at the centre / (F / 2a)",
+              title="Mandel: the Mandel-Cryer rise above the undrained value")
+    right.legend(fontsize=8)
+    for ax in (left, right):
+        ax.grid(alpha=0.3, which="both")
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path

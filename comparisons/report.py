@@ -38,6 +38,8 @@ def make_report(root="reports"):
         ("FEM soil column stability",
          lambda: tables.write(verification.fem_soil_column(),
                               root / "tables" / "fem_soil_column")),
+        ("soil column profiles (Fig. 8 analogue)", lambda: _column(root)),
+        ("Terzaghi and Mandel, EFG and FEM", lambda: _consolidation(root)),
         ("stress paths (driver)",
          lambda: [figures.stress_paths_driver(root / "figures" / "stress_paths_driver.png")]),
     ]
@@ -62,3 +64,15 @@ def _paths(root):
                           root / "tables" / "stress_paths_summary"),
             figures.stress_paths(table, root / "figures" / "fig4_stress_paths.png"),
             figures.err_history(table, root / "figures" / "fig6_err.png")]
+
+
+def _column(root):
+    table = verification.column_profiles()
+    return [*tables.write(table, root / "tables" / "column_profiles"),
+            figures.column_profiles(table, root / "figures" / "column_profiles.png")]
+
+
+def _consolidation(root):
+    terzaghi, mandel = verification.consolidation_histories()
+    return [*tables.write(mandel, root / "tables" / "mandel_centre"),
+            figures.consolidation(terzaghi, mandel, root / "figures" / "consolidation.png")]

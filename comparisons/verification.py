@@ -13,6 +13,7 @@ import pandas as pd
 from comparisons.metrics import (axis_profile, mandel_errors, moose_errors,
                                  oscillation_index, overshoot, terzaghi_errors)
 from comparisons import runner
+from comparisons.peers import moose_terzaghi
 from efg.statics import solve
 from soil.driver import run_test
 from soil.errors import SoilwaterError
@@ -146,6 +147,7 @@ def soil_column(permeabilities=(1e-5, 1e-7), densities=(11, 21, 41),
                      "ratio": stability_number(case), "weights": label,
                      "overshoot_first": overshoot(first, load),
                      "oscillation_first": oscillation_index(first, load),
+                     "symbol": symbol(oscillation_index(first, load)),
                      "time_later": times[step],
                      "oscillation_later": oscillation_index(late, load)})
     return pd.DataFrame(rows)
@@ -175,7 +177,8 @@ def fem_soil_column(ratios=(3, 30, 300), methods=FEM_METHODS):
         load = -result.case.boundary.top.traction[1]
         rows.append({"ratio": ratio, "dt": dt, "method": method,
                      "overshoot": overshoot(p, load),
-                     "oscillation": oscillation_index(p, load)})
+                     "oscillation": oscillation_index(p, load),
+                     "symbol": symbol(oscillation_index(p, load))})
     return pd.DataFrame(rows)
 
 
@@ -246,3 +249,98 @@ def consolidation():
     rows += [("terzaghi", k, v) for k, v in terzaghi.items()]
     rows += [("mandel", k, v) for k, v in mandel.items()]
     return pd.DataFrame(rows, columns=["case", "metric", "value"])
+
+
+#: Runs of the column figure: label -> (method, overrides), at the built-in first step.
+COLUMN_RUNS = {**{f"EFG {label}": ("efg", (f"efg.weight_u={u}", f"efg.weight_p={p}"))
+                  for label, (u, p) in COMBINATIONS.items()},
+               **{method: (method, ()) for method in FEM_METHODS}}
+
+
+def column_profiles(runs=COLUMN_RUNS):
+    """Pore pressure along the soil column's axis after the first step, every run.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``run, y`` (current height, m), ``p_w`` over the load, and ``reference``: the
+        Terzaghi series with the initial constrained modulus (indicative: Cam-clay
+        yields under the load, so its consolidation is slower).
+    """
+    from soil.analytical import terzaghi
+
+    results = _results([("soil-column", ("time.end=40.0",) + overrides, method)
+                        for method, overrides in runs.values()])
+    frames = []
+    for label, result in zip(runs, results):
+        case = result.case
+        y, p = axis_profile(result, 1)
+        load = -case.boundary.top.traction[1]
+        material, fluid = case.material(), case.fluid
+        stress, state = material.initial_state(1)
+        K, G = material.moduli(-stress[0, :3].mean(), state["v"][0])
+        reference, _ = terzaghi(y, case.times()[1], load, case.geometry.height,
+                                K + 4 * G / 3, fluid.biot_alpha, fluid.storage,
+                                fluid.mobility)
+        frames.append(pd.DataFrame({"run": label, "y": y, "p_w": p / load,
+                                    "reference": reference / load}))
+    return pd.concat(frames, ignore_index=True)
+
+
+#: Oscillation-index thresholds of the paper's symbols (first step, over the load).
+SYMBOLS = ((0.1, "good (○)"), (1.0, "better (△)"), (np.inf, "bad (×)"))
+
+
+def symbol(index):
+    """The paper's Table 2 symbol for an oscillation index: < 0.1 good, < 1 better, else
+    bad."""
+    return next(label for limit, label in SYMBOLS if index < limit)
+
+
+def consolidation_histories():
+    """Terzaghi and Mandel pore pressures of EFG and FEM beside the closed forms.
+
+    Returns
+    -------
+    terzaghi : pandas.DataFrame
+        ``run, time, y, p`` (p over the undrained p0) at the probes p0..p9, for EFG
+        (5 x 41 nodes), fem-q1q1 and fem-th (MOOSE's 2 x 11 vertices) and MOOSE's file.
+    mandel : pandas.DataFrame
+        ``run, time, p_centre, p_exact`` (over F/(2a)) for EFG, fem-th and fem-q1q1.
+    """
+    from soil.analytical import mandel
+
+    runs = {"EFG (5 x 41 nodes)": ("efg", ("discretisation.nx=5", "discretisation.ny=41")),
+            "fem-q1q1": ("fem-q1q1", ()), "fem-th": ("fem-th", ())}
+    terzaghi_runs = _results([("terzaghi", o, m) for m, o in runs.values()])
+    mandel_runs = _results([("mandel", (), m) for m in ("efg", "fem-th", "fem-q1q1")])
+    frames = []
+    for label, result in zip(runs, terzaghi_runs):
+        case, h = result.case, result.history
+        p0 = _terzaghi_p0(case)
+        for k in range(10):
+            frames.append(pd.DataFrame({"run": label, "time": h.time, "y": float(k),
+                                        "p": h[f"p_w@p{k}"] / p0}))
+    moose, case = moose_terzaghi(), terzaghi_runs[1].case
+    p0_unit_load = _terzaghi_p0(case) / -case.boundary.top.traction[1]  # MOOSE's load is 1
+    frames += [pd.DataFrame({"run": "MOOSE Q1/Q1 (peer)", "time": moose.time, "y": float(k),
+                             "p": moose[f"p{k}"] / p0_unit_load}) for k in range(10)]
+    mandel_frames = []
+    for label, result in zip(("EFG", "fem-th", "fem-q1q1"), mandel_runs):
+        case, h = result.case, result.history
+        material, a = case.material(), case.geometry.width
+        force = -case.plate_force(case.times()[-1])
+        exact = [mandel([0.0], t, force, a, material.G, material.nu, case.fluid.mobility)[0]
+                 for t in h.time]
+        mandel_frames.append(pd.DataFrame({"run": label, "time": h.time,
+                                           "p_centre": h["p_w@centre"] / (force / (2 * a)),
+                                           "p_exact": np.array(exact) / (force / (2 * a))}))
+    return pd.concat(frames, ignore_index=True), pd.concat(mandel_frames, ignore_index=True)
+
+
+def _terzaghi_p0(case):
+    """Undrained pore pressure of the Terzaghi column under its load."""
+    material, fluid = case.material(), case.fluid
+    load = -case.boundary.top.traction[1]
+    mv = 1 / (material.K + 4 * material.G / 3)
+    return fluid.biot_alpha * mv * load / (fluid.storage + fluid.biot_alpha**2 * mv)
