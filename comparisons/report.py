@@ -1,78 +1,224 @@
-"""``soilwater report``: regenerate every figure and table under ``reports/``."""
+"""``soilwater report``: regenerate every figure and table under ``reports/`` and assemble
+``reports/REPORT.md`` from the numbers of the same run."""
 
+import time
 from pathlib import Path
 
 from tqdm import tqdm
 
-from comparisons import figures, peers, tables, verification
+from comparisons import figures, peers, runner, tables, verification
 
 
 def make_report(root="reports"):
     """Write the report files; returns the list of paths written.
 
-    Tables go to ``root/tables``, figures to ``root/figures``.
+    Tables go to ``root/tables``, figures to ``root/figures``; ``root/REPORT.md`` states
+    what each shows, with the numbers measured in this run.
     """
     root = Path(root)
-    (root / "tables").mkdir(parents=True, exist_ok=True)
-    (root / "figures").mkdir(parents=True, exist_ok=True)
-    tasks = [
-        ("Table 1", lambda: tables.write(tables.table1(), root / "tables" / "table1")),
-        ("peer single-point data",
-         lambda: tables.write(peers.summary(), root / "tables" / "peer_single_point")),
-        ("shape functions (Fig. 7)",
-         lambda: [figures.shape_functions(root / "figures" / "shape_functions.png")]),
-        ("background cells (Figs. 3, 5)",
-         lambda: [figures.background_cells(root / "figures" / "cells.png")]),
-        ("patch test", lambda: tables.write(verification.patch_test(),
-                                            root / "tables" / "patch_test")),
-        ("cantilever convergence", lambda: _convergence(root)),
-        ("stress paths (Figs. 4, 6)", lambda: _paths(root)),
-        ("soil column stability (Table 2, EFG)",
-         lambda: tables.write(verification.soil_column(), root / "tables" / "table2_efg")),
-        ("Terzaghi and Mandel (EFG)",
-         lambda: tables.write(verification.consolidation(),
-                              root / "tables" / "efg_consolidation")),
-        ("FEM Terzaghi (vs MOOSE and closed form)",
-         lambda: tables.write(verification.fem_terzaghi(moose=peers.moose_terzaghi()),
-                              root / "tables" / "fem_terzaghi")),
-        ("FEM soil column stability",
-         lambda: tables.write(verification.fem_soil_column(),
-                              root / "tables" / "fem_soil_column")),
-        ("soil column profiles (Fig. 8 analogue)", lambda: _column(root)),
-        ("Terzaghi and Mandel, EFG and FEM", lambda: _consolidation(root)),
-        ("stress paths (driver)",
-         lambda: [figures.stress_paths_driver(root / "figures" / "stress_paths_driver.png")]),
-    ]
-    written = []
-    for name, task in (bar := tqdm(tasks, desc="report", unit="item")):
+    for sub in ("tables", "figures"):
+        (root / sub).mkdir(parents=True, exist_ok=True)
+    tic = time.perf_counter()
+    data, written = {}, []
+    for name, task in (bar := tqdm(TASKS, desc="report", unit="item")):
         bar.set_postfix_str(name)
-        written += list(task())
-    return written
+        written += task(root, data)
+    data["seconds"] = time.perf_counter() - tic
+    data["counts"] = dict(runner.COUNTS)
+    text = markdown(data)
+    (root / "REPORT.md").write_text(text)
+    return written + [root / "REPORT.md"]
 
 
-def _convergence(root):
-    table = verification.cantilever_convergence(corrections=("vci", "none"))
-    vci = table[table.correction == "vci"]
-    return [*tables.write(table, root / "tables" / "efg_convergence"),
-            figures.efg_convergence(vci, root / "figures" / "efg_convergence.png")]
+def _table(name, make, stem, *needs):
+    """A task computing a table (from tables computed earlier: ``needs``), kept under
+    ``name`` and written to ``tables/stem``."""
+    def task(root, data):
+        data[name] = make(*(data[n] for n in needs))
+        return list(tables.write(data[name], root / "tables" / stem))
+    return name, task
 
 
-def _paths(root):
-    table = verification.stress_paths()
-    return [*tables.write(table, root / "tables" / "stress_paths"),
-            *tables.write(verification.path_summary(table),
-                          root / "tables" / "stress_paths_summary"),
-            figures.stress_paths(table, root / "figures" / "fig4_stress_paths.png"),
-            figures.err_history(table, root / "figures" / "fig6_err.png")]
+def _figure(name, draw, stem, *needs):
+    """A task drawing ``figures/stem.png`` from tables computed earlier (``needs``)."""
+    def task(root, data):
+        return [draw(*(data[n] for n in needs), root / "figures" / f"{stem}.png")]
+    return name, task
 
 
-def _column(root):
-    table = verification.column_profiles()
-    return [*tables.write(table, root / "tables" / "column_profiles"),
-            figures.column_profiles(table, root / "figures" / "column_profiles.png")]
+def _histories(root, data):
+    data["terzaghi histories"], data["mandel histories"] = \
+        verification.consolidation_histories()
+    return list(tables.write(data["mandel histories"], root / "tables" / "mandel_centre"))
 
 
-def _consolidation(root):
-    terzaghi, mandel = verification.consolidation_histories()
-    return [*tables.write(mandel, root / "tables" / "mandel_centre"),
-            figures.consolidation(terzaghi, mandel, root / "figures" / "consolidation.png")]
+TASKS = [
+    _table("table1", tables.table1, "table1"),
+    _table("peers", peers.summary, "peer_single_point"),
+    _figure("driver", figures.stress_paths_driver, "stress_paths_driver"),
+    _figure("shape functions", figures.shape_functions, "shape_functions"),
+    _figure("cells", figures.background_cells, "cells"),
+    _table("patch", verification.patch_test, "patch_test"),
+    _table("convergence", lambda: verification.cantilever_convergence(
+        corrections=("vci", "none")), "efg_convergence"),
+    _figure("convergence figure", lambda table, path: figures.efg_convergence(
+        table[table.correction == "vci"], path), "efg_convergence", "convergence"),
+    _table("paths", verification.stress_paths, "stress_paths"),
+    _table("path summary", verification.path_summary, "stress_paths_summary", "paths"),
+    _figure("fig4", figures.stress_paths, "fig4_stress_paths", "paths"),
+    _figure("fig6", figures.err_history, "fig6_err", "paths"),
+    _table("table2 efg", verification.soil_column, "table2_efg"),
+    _table("table2 fem", verification.fem_soil_column, "fem_soil_column"),
+    _table("profiles", verification.column_profiles, "column_profiles"),
+    _figure("profiles figure", figures.column_profiles, "column_profiles", "profiles"),
+    _table("efg consolidation", verification.consolidation, "efg_consolidation"),
+    _table("fem terzaghi", lambda: verification.fem_terzaghi(moose=peers.moose_terzaghi()),
+           "fem_terzaghi"),
+    ("consolidation histories", _histories),
+    _figure("consolidation figure", figures.consolidation, "consolidation",
+            "terzaghi histories", "mandel histories"),
+]
+
+
+def markdown(data):
+    """REPORT.md: one paragraph per figure or table, numbers from ``data``."""
+    s = data["path summary"].set_index(["case", "run"])
+    uc = s.loc["unconfined-compression"]
+    t2, fem = data["table2 efg"], data["table2 fem"]
+    efg21 = t2[(t2.ny == 21) & (t2.permeability == t2.permeability.max())]
+    fem30 = fem[fem.ratio == 30]
+    patch = data["patch"].set_index(["cells", "correction"])
+    conv = data["convergence"]
+    q_rates = conv[(conv.weight == "Q") & (conv.cells == "delaunay")
+                   & (conv.correction == "vci")].rate.dropna()
+    ec = data["efg consolidation"].set_index(["case", "metric"]).value
+    ft = data["fem terzaghi"].set_index(["method", "steps"])
+    peer = data["peers"]
+    mandel = data["mandel histories"]
+    lines = [
+        "# soilwater report",
+        "",
+        "Regenerated by `make report` in "
+        f"{data['seconds']:.0f} s on this machine (2 cores), "
+        f"{data['counts']['cached']} of {data['counts']['runs']} solver runs read from "
+        "the cache in `.cache/runs` (keyed by case, method and solver source, so only "
+        "what changed is recomputed; from an empty cache the report takes about two "
+        "minutes). Every number below comes from this run; tables are under `tables/`, "
+        "figures under `figures/`.",
+        "",
+        "## Material (Table 1) and the theoretical solution",
+        "",
+        tables.to_markdown(data["table1"]),
+        "![driver](figures/stress_paths_driver.png)",
+        "",
+        "The stress-point driver integrates the finite-strain Cam-clay rate equations "
+        "under the paper's uniform stretching; its undrained paths lie on the closed "
+        "forms (circles). Single-point peer data, with the tolerance of a different "
+        "model variant:",
+        "",
+        tables.to_markdown(peer),
+        "## EFG core: shape functions (Fig. 7), background cells (Figs. 3, 5), patch test",
+        "",
+        "![shape functions](figures/shape_functions.png)",
+        "",
+        "E-B (c = 0.25) is nearly interpolating at the paper's density; at twice the "
+        "density with the same support radius it is not.",
+        "",
+        "![cells](figures/cells.png)",
+        "",
+        "Patch test (linear field imposed by penalty): with plain Gauss quadrature (the "
+        "paper's scheme) the Delaunay cells miss by "
+        f"{patch.loc[('delaunay', 'none'), 'displacement']:.1e} in displacement and "
+        f"{patch.loc[('delaunay', 'none'), 'stress']:.1e} in stress; with variationally "
+        "consistent test gradients (VCI, our default) by "
+        f"{patch.loc[('delaunay', 'vci'), 'displacement']:.1e} and "
+        f"{patch.loc[('delaunay', 'vci'), 'stress']:.1e} (the penalty's floor). "
+        "Cantilever energy-norm convergence rates for Q on Delaunay cells: "
+        + ", ".join(f"{r:.2f}" for r in q_rates) + ".",
+        "",
+        "![convergence](figures/efg_convergence.png)",
+        "",
+        "## Unconfined compression and simple shear (Figs. 4 and 6)",
+        "",
+        "![fig4](figures/fig4_stress_paths.png)",
+        "![fig6](figures/fig6_err.png)",
+        "",
+        "Largest distance of the averaged path from the driver (over p'0) and ERR "
+        "(paper eq. 1):",
+        "",
+        tables.to_markdown(data["path summary"]),
+        "The paper's claim that Delaunay cells are more accurate than square cells "
+        "holds as measured: with the paper's plain quadrature the square cells' ERR "
+        f"reaches {uc.loc['EFG, squares, plain Gauss', 'err_max']:.2g} and their "
+        "averaged path leaves the driver's (error "
+        f"{uc.loc['EFG, squares, plain Gauss', 'path_error']:.2g} p'0), while Delaunay "
+        "cells keep the path within "
+        f"{uc.loc['EFG, Delaunay, plain Gauss', 'path_error']:.2g} p'0 (ERR up to "
+        f"{uc.loc['EFG, Delaunay, plain Gauss', 'err_max']:.2g}). With VCI the "
+        "Delaunay run stays homogeneous (ERR "
+        f"{uc.loc['EFG, Delaunay cells', 'err_max']:.1e}) but the square cells still "
+        "depart once the moving boundary cuts through the quarter cells (ERR "
+        f"{uc.loc['EFG, square cells', 'err_max']:.2g}). The remaining path error of "
+        f"{uc.loc['EFG, Delaunay cells', 'path_error']:.2g} p'0 is the first-order "
+        "time error of the return mapping (100 steps), the same for EFG and FEM.",
+        "",
+        "## Soil column: pore-pressure stability (Table 2, Fig. 8)",
+        "",
+        "![profiles](figures/column_profiles.png)",
+        "",
+        "Symbols from the oscillation index at the first step (total variation of p_w "
+        "along the axis in excess of a monotone profile, over the load): good (○) "
+        "below 0.1, better (△) below 1, bad (×) otherwise. EFG, 3 x 11 to 3 x 41 "
+        "nodes, two permeabilities:",
+        "",
+        tables.to_markdown(t2),
+        "FEM at first steps with h²/(c_v dt) of 3, 30 and 300:",
+        "",
+        tables.to_markdown(fem),
+        "At the built-in step (h²/(c_v dt) = 30, 3 x 21 nodes) the EFG overshoots are "
+        + ", ".join(f"{r.weights} {r.overshoot_first:.2f}" for r in efg21.itertuples())
+        + " against FEM "
+        + ", ".join(f"{r.method} {r.overshoot:.2f}" for r in fem30.itertuples())
+        + ". EFG's wiggles are small but spread along the whole column (see the "
+        "profiles), FEM's sit at the node below the drained top. EFG runs rated good: "
+        + (", ".join(f"{r.weights} at {r.ny} nodes, k = {r.permeability:g}"
+                     for r in t2[t2.oscillation_first < 0.1].itertuples()) or "none")
+        + ". Smallest first-step overshoot per density: "
+        + ", ".join(f"{ny} nodes {g.loc[g.overshoot_first.idxmin(), 'weights']}"
+                    for ny, g in t2[t2.permeability == t2.permeability.max()].groupby("ny"))
+        + " (k = " + f"{t2.permeability.max():g}" + " m/s).",
+        "",
+        "## Verification: Terzaghi and Mandel",
+        "",
+        "![consolidation](figures/consolidation.png)",
+        "",
+        "Terzaghi (peer case A): fem-q1q1 on MOOSE's mesh and steps matches the MOOSE "
+        "file to "
+        f"{ft.loc[('fem-q1q1', 'moose'), 'moose_pressure_after_0.1']:.1e} p0 for "
+        "t >= 0.1, with MOOSE's first-step overshoot ("
+        f"{ft.loc[('fem-q1q1', 'moose'), 'overshoot']:.3f}); the stabilised P1/P1 "
+        f"removes it ({ft.loc[('fem-p1p1-stab', 'moose'), 'overshoot']:.4f}). On MOOSE's "
+        "steps every method is about "
+        f"{ft.loc[('fem-th', 'moose'), 'error_p0_after_0.1']:.3f} p0 from the closed "
+        "form (backward Euler's time error); with steps capped at 0.01 fem-th is "
+        f"{ft.loc[('fem-th', 'dt<=0.01'), 'error_p0_after_0.1']:.4f} p0 away. EFG "
+        "(5 x 41 nodes, MOOSE's steps) is "
+        f"{ec.loc[('terzaghi', 'max_error_load_after_0.1')]:.3f} of the load away for "
+        "t >= 0.1 with a settlement error of "
+        f"{ec.loc[('terzaghi', 'settlement_error_after_0.1')] * 100:.2f} %. "
+        "Mandel: the centre pressure rises to "
+        + ", ".join(f"{run} {g.p_centre.max():.3f}" for run, g in mandel.groupby("run"))
+        + f" of F/(2a) (closed form {mandel.p_exact.max():.3f}): the Mandel-Cryer effect.",
+        "",
+        "## Where we differ from the paper",
+        "",
+        "- The 111-node specimen is reconstructed (7 x 9 grid + cell centres): the "
+        "paper's figure is not in our text.",
+        "- EFG uses variationally consistent test gradients by default; the paper's plain "
+        "Gauss quadrature is reported beside it (`efg.correction = \"none\"`).",
+        "- The Table 2 symbols follow stated thresholds on a measured index; the paper "
+        "gives no numbers. Our measurements do not support an unqualified 'good' for "
+        "E-A/E-B.",
+        "",
+    ]
+    return "\n".join(lines)

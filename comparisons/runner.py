@@ -30,6 +30,8 @@ from soil.problems import load_case
 
 ROOT = Path(__file__).resolve().parents[1]
 CACHE = ROOT / ".cache" / "runs"
+#: Jobs run and jobs read from the cache in this process (the report states them).
+COUNTS = {"runs": 0, "cached": 0}
 
 
 @dataclass(frozen=True)
@@ -150,6 +152,8 @@ def run(jobs, workers=None, dask=None, cache_dir=CACHE, progress=True, desc="swe
                 outcomes.append(future.result())
                 bar.update()
     bar.close()
+    COUNTS["runs"] += len(outcomes)
+    COUNTS["cached"] += sum(o.cached for o in outcomes)
     return outcomes
 
 
