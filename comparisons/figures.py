@@ -306,3 +306,63 @@ def consolidation(terzaghi_table, mandel_table, path, times=(0.1, 0.5, 1.0, 3.0)
     fig.savefig(path, dpi=150)
     plt.close(fig)
     return path
+
+
+def problems(path, names=("unconfined-compression", "soil-column")):
+    """Paper Figs. 3 and 8: nodes and boundary conditions of the two problems.
+
+    Edges are drawn by their condition: fixed components as ticks across (ux) or along
+    (uy) the edge, prescribed motion as arrows of L x, tractions as arrows, drained edges
+    in blue.
+    """
+    from soil.problems import load_case
+
+    fig, axes = plt.subplots(1, len(names), figsize=(9, 5.6), constrained_layout=True,
+                             gridspec_kw={"width_ratios": [1.3, 1]})
+    for ax, name in zip(axes, names):
+        case = load_case(name)
+        nodes, loop = case.nodes(), case.boundary_loop()
+        ring = nodes[np.r_[loop, loop[:1]]]
+        ax.plot(ring[:, 0], ring[:, 1], "k-", lw=1)
+        ax.plot(nodes[:, 0], nodes[:, 1], "o", ms=3, color="0.3")
+        size = 0.06 * max(case.geometry.width, case.geometry.height)
+        for edge_name, edge in case.boundary.items():
+            _edge(ax, case, edge_name, edge, size)
+        ax.set_aspect("equal")
+        ax.set(title=f"{name}: {len(nodes)} nodes", xlabel="x (m)", ylabel="y (m)")
+        ax.margins(0.12)
+    handles = [plt.Line2D([], [], color="C3", marker="|", ls="none", ms=8, label="fixed "
+                          "component"),
+               plt.Line2D([], [], color="C2", marker=">", ls="none", label="prescribed v = L x"),
+               plt.Line2D([], [], color="C1", marker="v", ls="none", label="traction"),
+               plt.Line2D([], [], color="C0", lw=3, label="drained (p$_w$ = 0)")]
+    fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8)
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def _edge(ax, case, name, edge, size):
+    """Draw one edge's conditions (see :func:`problems`)."""
+    W, H = case.geometry.width, case.geometry.height
+    along = {"left": ([0, 0], [0, H]), "right": ([W, W], [0, H]),
+             "bottom": ([0, W], [0, 0]), "top": ([0, W], [H, H])}[name]
+    xs = np.linspace(*along[0], 7)[1:-1]
+    ys = np.linspace(*along[1], 7)[1:-1]
+    if edge.drained:
+        ax.plot(*along, color="C0", lw=3, alpha=0.7)
+    for f, kind in enumerate((edge.ux, edge.uy)):
+        if kind == "fixed":
+            dx, dy = (size / 2, 0) if f == 0 else (0, size / 2)
+            for x, y in zip(xs, ys):
+                ax.plot([x - dx, x + dx], [y - dy, y + dy], color="C3", lw=1.5)
+        elif kind == "prescribed":
+            v = np.stack([xs, ys], 1) @ case.loading.L.T
+            v = v / max(np.abs(v).max(), 1e-300) * size * 1.5
+            ax.quiver(xs, ys, v[:, 0] * (f == 0), v[:, 1] * (f == 1), color="C2",
+                      angles="xy", scale_units="xy", scale=1, width=0.006)
+    if edge.traction != "exact" and np.any(edge.traction):
+        t = np.asarray(edge.traction, float)
+        t = t / np.abs(t).max() * size * 1.5
+        ax.quiver(xs - t[0], ys - t[1], t[0] + 0 * xs, t[1] + 0 * ys, color="C1",
+                  angles="xy", scale_units="xy", scale=1, width=0.02)

@@ -56,6 +56,7 @@ TASKS = [
     _table("table1", tables.table1, "table1"),
     _table("peers", peers.summary, "peer_single_point"),
     _figure("driver", figures.stress_paths_driver, "stress_paths_driver"),
+    _figure("problems", figures.problems, "problems"),
     _figure("shape functions", figures.shape_functions, "shape_functions"),
     _figure("cells", figures.background_cells, "cells"),
     _table("patch", verification.patch_test, "patch_test"),
@@ -117,6 +118,16 @@ def markdown(data):
         "model variant:",
         "",
         tables.to_markdown(peer),
+        "## The problems (Figs. 3 and 8)",
+        "",
+        "![problems](figures/problems.png)",
+        "",
+        "Unconfined compression: a quarter specimen, frictionless base, top moved with "
+        "the constant stretching D22 of the driver test, undrained (k = 0, all edges "
+        "impermeable), initial effective stress held by a negative pore pressure. Soil "
+        "column: rollers on the sides, fixed base, an instantaneous load on the drained "
+        "top.",
+        "",
         "## EFG core: shape functions (Fig. 7), background cells (Figs. 3, 5), patch test",
         "",
         "![shape functions](figures/shape_functions.png)",
