@@ -77,6 +77,8 @@ def _parser():
 
     p = sub.add_parser("report", help="regenerate every figure and table under reports/")
     p.add_argument("--out", default="reports", help="report folder (default reports)")
+    p.add_argument("--dask", metavar="ADDRESS", help="send the sweeps to a Dask "
+                   "distributed scheduler (pip install 'soilwater[dask]')")
     p.set_defaults(func=_report)
     return parser
 
@@ -163,8 +165,10 @@ def _bench(args):
 
 
 def _report(args):
+    from comparisons import runner
     from comparisons.report import make_report
 
+    runner.DASK["address"] = args.dask
     for path in make_report(args.out):
         print(f"wrote {path}")
 

@@ -30,6 +30,8 @@ from soil.problems import load_case
 
 ROOT = Path(__file__).resolve().parents[1]
 CACHE = ROOT / ".cache" / "runs"
+#: Scheduler address for every sweep of this process (``--dask ADDRESS``), or None.
+DASK = {"address": None}
 #: Jobs run and jobs read from the cache in this process (the report states them).
 COUNTS = {"runs": 0, "cached": 0}
 
@@ -102,20 +104,38 @@ def execute(job, cache_dir=CACHE):
     tic = time.perf_counter()
     try:
         path = Path(cache_dir) / f"{job.key()}.pkl" if cache_dir else None
-        if path is not None and path.exists():
-            with path.open("rb") as fh:
-                return Outcome(job, pickle.load(fh), None, time.perf_counter() - tic, True)
+        cached = _read_cache(path)
+        if cached is not None:
+            return Outcome(job, cached, None, time.perf_counter() - tic, True)
         case = load_case(job.case, job.overrides)
         result = solver(job.method)(case, progress=False)
-        if path is not None:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(f".{os.getpid()}.tmp")
-            with tmp.open("wb") as fh:
-                pickle.dump(result, fh)
-            os.replace(tmp, path)
+        _write_cache(path, result)
         return Outcome(job, result, None, time.perf_counter() - tic, False)
     except (SoilwaterError, ArithmeticError, ValueError) as err:
         return Outcome(job, None, f"{type(err).__name__}: {err}", time.perf_counter() - tic)
+
+
+def _read_cache(path):
+    """A cached Result, or None (no cache, no entry, or a cache this worker cannot read)."""
+    try:
+        with path.open("rb") as fh:
+            return pickle.load(fh)
+    except (AttributeError, OSError, pickle.UnpicklingError, EOFError):
+        return None
+
+
+def _write_cache(path, result):
+    """Store a Result; a cache this worker cannot write (a remote Dask worker) is skipped."""
+    if path is None:
+        return
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        with tmp.open("wb") as fh:
+            pickle.dump(result, fh)
+        os.replace(tmp, path)
+    except OSError:
+        pass
 
 
 def run(jobs, workers=None, dask=None, cache_dir=CACHE, progress=True, desc="sweep"):
@@ -127,18 +147,18 @@ def run(jobs, workers=None, dask=None, cache_dir=CACHE, progress=True, desc="swe
     workers : int, optional
         Local processes (default: the number of cores; 1 runs in this process).
     dask : str, optional
-        Address of a Dask distributed scheduler; the same jobs go there instead.
+        Address of a Dask distributed scheduler; the same jobs go there instead
+        (default: :data:`DASK`, which ``soilwater report --dask ADDRESS`` sets).
     cache_dir : path or None
         Where results are cached (None: no cache).
     progress : bool
         A progress bar over the jobs.
     """
-    jobs = list(jobs)
+    jobs, dask = list(jobs), dask or DASK["address"]
     bar = tqdm(total=len(jobs), desc=desc, unit="run", disable=not progress or None,
                leave=False)
     if dask is not None:
-        outcomes = _run_dask(jobs, dask, cache_dir)
-        bar.update(len(jobs))
+        outcomes = _run_dask(jobs, dask, cache_dir, bar)
     elif (workers or os.cpu_count()) == 1 or len(jobs) == 1:
         outcomes = []
         for job in jobs:
@@ -157,14 +177,17 @@ def run(jobs, workers=None, dask=None, cache_dir=CACHE, progress=True, desc="swe
     return outcomes
 
 
-def _run_dask(jobs, address, cache_dir):
+def _run_dask(jobs, address, cache_dir, bar):
     try:
-        from dask.distributed import Client
+        from dask.distributed import Client, as_completed
     except ImportError:
-        raise SoilwaterError("--dask needs the optional extra: pip install "
+        raise SoilwaterError("a Dask sweep needs the optional extra: pip install "
                              "'soilwater[dask]'") from None
     with Client(address) as client:
-        return client.gather(client.map(execute, jobs, cache_dir=cache_dir, pure=False))
+        futures = client.map(execute, jobs, cache_dir=cache_dir, pure=False)
+        for _ in as_completed(futures):
+            bar.update()
+        return client.gather(futures)
 
 
 def table(outcomes):
