@@ -21,7 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from soil.errors import ConvergenceError, require
-from soil.kinematics import DEVIATORIC, IDENTITY, deviator, hughes_winget, invariants
+from soil.kinematics import (DEVIATORIC, IDENTITY, deviator, double_dot, hughes_winget,
+                             invariants)
 
 MODELS = ("original", "modified")
 
@@ -183,7 +184,7 @@ class CamClay:
         vbar, dvbar = _mean_volume(v_n, dev)
         K_n, G = self.moduli(p_n, v_n)
         s_tr = deviator(stress) + 2 * G[:, None] * (dstrain @ DEVIATORIC.T)
-        q_tr = np.sqrt(1.5 * ((s_tr[:, :3] ** 2).sum(axis=1) + 2 * s_tr[:, 3] ** 2))
+        q_tr = np.sqrt(1.5 * double_dot(s_tr, s_tr))
         scale = 1.0 / pc_n**2
         p_tr = p_n * np.exp(-vbar * dev / self.kappa)
 
@@ -304,7 +305,7 @@ class CamClay:
             nhat = deviator(stress) / q
         else:  # vertex of the original surface: follow the trial deviatoric rate
             sdot = 2 * G * DEVIATORIC @ D
-            qdot = np.sqrt(1.5 * (sdot[:3] @ sdot[:3] + 2 * sdot[3] ** 2))
+            qdot = np.sqrt(1.5 * double_dot(sdot, sdot))
             nhat = sdot / qdot if qdot > 0 else np.zeros(4)
         _, fp, fq, fpc = self._f(p, q, pc, 1.0 / pc**2)[:4]
         N = -fp * IDENTITY / 3 + 1.5 * fq * np.array([1, 1, 1, 2.0]) * nhat

@@ -24,27 +24,6 @@ DEVIATORIC = np.array([
 ])
 
 
-def stretching_and_spin(L):
-    """Split velocity gradients into stretching and spin.
-
-    Parameters
-    ----------
-    L : array_like, shape (..., 3, 3)
-        Velocity gradients ``L_ij = d v_i / d x_j`` [1/time]; only the in-plane block
-        and ``L_zz`` are used (plane strain has no out-of-plane shear).
-
-    Returns
-    -------
-    D : ndarray, shape (..., 4)
-        Stretching as a strain-like vector ``(D_xx, D_yy, D_zz, 2 D_xy)``.
-    w : ndarray, shape (...)
-        In-plane spin ``W_xy``.
-    """
-    L = np.asarray(L, dtype=float)
-    D = np.stack([L[..., 0, 0], L[..., 1, 1], L[..., 2, 2], L[..., 0, 1] + L[..., 1, 0]], axis=-1)
-    return D, 0.5 * (L[..., 0, 1] - L[..., 1, 0])
-
-
 def hughes_winget(stress, dw):
     """Rotate stresses by the Hughes-Winget increment ``R = (I - dW/2)^-1 (I + dW/2)``.
 
@@ -117,13 +96,6 @@ def deviator(stress):
 def double_dot(a, b):
     """``a : b`` for two stress-like vectors (shear counted twice)."""
     return (a[..., :3] * b[..., :3]).sum(axis=-1) + 2.0 * a[..., 3] * b[..., 3]
-
-
-def as_strain_like(t):
-    """Turn stress-like (tensor) components into strain-like ones (shear doubled)."""
-    t = np.array(t, dtype=float)
-    t[..., 3] *= 2.0
-    return t
 
 
 #: Voigt strain component of (displacement field f, spatial derivative k): ``B[f, k, :]``.
