@@ -188,10 +188,9 @@ def support_radii(nodes, scale):
 def neighbours(nodes, points, support):
     """CSR pattern of the nodes each point sees: ``|x_p - x_J| < d_mJ``.
 
-    One k-d tree query in a lifted 3-D space: node J at ``(x_J, y_J, sqrt(R^2 - d_mJ^2))``,
-    points at ``(x, y, 0)``, ``R = max d_mJ``; a lifted distance below R is a planar one
-    below ``d_mJ`` (the query radius is widened by a relative 1e-12 against rounding, and
-    the planar test is then repeated exactly).
+    A cell list: the nodes are binned into squares of side ``R = max d_mJ``, so a point
+    tests only the nodes of its own and the 8 surrounding squares (two passes, count and
+    fill, then each row is sorted).
 
     Parameters
     ----------
@@ -208,38 +207,85 @@ def neighbours(nodes, points, support):
     indices : ndarray, shape (nnz,)
         Node indices of each point, sorted within a row. int32 when the sizes allow it
         (the type scipy.sparse keeps without copying).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> nodes = np.array([[0.0, 0.0], [1.0, 0.0], [3.0, 0.0]])
+    >>> indptr, indices = neighbours(nodes, np.array([[0.5, 0.0], [2.9, 0.0]]),
+    ...                              np.array([1.0, 1.0, 0.5]))
+    >>> indptr.tolist(), indices.tolist()
+    ([0, 2, 3], [0, 1, 2])
     """
-    radius = support.max()
-    lifted = np.column_stack([nodes, np.sqrt((radius - support) * (radius + support))])
-    flat = np.column_stack([points, np.zeros(len(points))])
-    pairs = cKDTree(flat).sparse_distance_matrix(cKDTree(lifted), radius * (1 + 1e-12),
-                                                 output_type="ndarray")
-    indptr, indices = _pattern(pairs["i"], pairs["j"], points, nodes, support)
+    size = max(float(support.max()), 1e-300)
+    origin = nodes.min(axis=0)
+    shape = np.maximum(np.ceil((nodes.max(axis=0) - origin) / size), 1).astype(np.int64)
+    start, order = _bins(nodes, origin, size, shape)
+    indptr, indices = _search(points, nodes, support, origin, size, shape, start, order)
     small = max(indices.size, len(nodes), len(points)) < np.iinfo(np.int32).max
     kind = np.int32 if small else np.int64
     return indptr.astype(kind), indices.astype(kind)
 
 
 @numba.njit(cache=True)
-def _pattern(point, node, points, nodes, support):
-    """Counting sort of the candidate pairs into CSR rows, keeping planar hits only."""
-    keep = np.empty(point.size, np.bool_)
+def _bin_of(x, y, origin, size, shape):
+    """Bin (column, row) of a point, clipped to the grid of bins."""
+    i = min(max(int(np.floor((x - origin[0]) / size)), 0), shape[0] - 1)
+    j = min(max(int(np.floor((y - origin[1]) / size)), 0), shape[1] - 1)
+    return i, j
+
+
+@numba.njit(cache=True)
+def _bins(nodes, origin, size, shape):
+    """Counting sort of the nodes by bin: bin b holds ``order[start[b]:start[b + 1]]``."""
+    key = np.empty(len(nodes), np.int64)
+    start = np.zeros(shape[0] * shape[1] + 1, np.int64)
+    for n in range(len(nodes)):
+        i, j = _bin_of(nodes[n, 0], nodes[n, 1], origin, size, shape)
+        key[n] = i * shape[1] + j
+        start[key[n] + 1] += 1
+    start = np.cumsum(start)
+    fill = start[:-1].copy()
+    order = np.empty(len(nodes), np.int64)
+    for n in range(len(nodes)):
+        order[fill[key[n]]] = n
+        fill[key[n]] += 1
+    return start, order
+
+
+@numba.njit(cache=True)
+def _search(points, nodes, support, origin, size, shape, start, order):
+    """Both passes of the cell-list search: row counts, then sorted column indices."""
     indptr = np.zeros(len(points) + 1, np.int64)
-    for k in range(point.size):
-        p, j = point[k], node[k]
-        dx, dy = points[p, 0] - nodes[j, 0], points[p, 1] - nodes[j, 1]
-        keep[k] = dx * dx + dy * dy < support[j] ** 2
-        indptr[p + 1] += keep[k]
-    indptr = np.cumsum(indptr)
-    indices = np.empty(indptr[-1], np.int64)
-    fill = indptr[:-1].copy()
-    for k in range(point.size):
-        if keep[k]:
-            indices[fill[point[k]]] = node[k]
-            fill[point[k]] += 1
+    indices = np.empty(0, np.int64)
     for p in range(len(points)):
+        indptr[p + 1] = indptr[p] + _scan(points[p], nodes, support, origin, size, shape,
+                                          start, order, indices, -1)
+    indices = np.empty(indptr[-1], np.int64)
+    for p in range(len(points)):
+        _scan(points[p], nodes, support, origin, size, shape, start, order, indices,
+              indptr[p])
         indices[indptr[p]:indptr[p + 1]].sort()
     return indptr, indices
+
+
+@numba.njit(cache=True)
+def _scan(point, nodes, support, origin, size, shape, start, order, out, k):
+    """Nodes seen by one point: counted, and written from ``out[k]`` on when ``k >= 0``."""
+    x, y = point[0], point[1]
+    bi, bj = _bin_of(x, y, origin, size, shape)
+    count = 0
+    for i in range(max(bi - 1, 0), min(bi + 2, shape[0])):
+        for j in range(max(bj - 1, 0), min(bj + 2, shape[1])):
+            b = i * shape[1] + j
+            for m in range(start[b], start[b + 1]):
+                n = order[m]
+                dx, dy = x - nodes[n, 0], y - nodes[n, 1]
+                if dx * dx + dy * dy < support[n] ** 2:
+                    if k >= 0:
+                        out[k + count] = n
+                    count += 1
+    return count
 
 
 @numba.njit(cache=True)
