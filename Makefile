@@ -18,7 +18,9 @@ test: $(STAMP)
 report: $(STAMP)
 	$(BIN)/soilwater report
 
+# The benchmark adds the optional PARDISO solver (x86_64; SuperLU elsewhere).
 bench: $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[fast]'
 	$(BIN)/soilwater bench
 
 clean:

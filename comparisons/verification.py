@@ -59,8 +59,9 @@ def cantilever_convergence(levels=((13, 4), (25, 7), (49, 13), (97, 25)),
             h = case.spacing[0]
             rate = (np.log(previous[1] / errors["energy"]) / np.log(previous[0] / h)
                     if previous else np.nan)
-            rows.append({"weight": label, "cells": cell, "correction": correction, "nx": nx, "ny": ny, "h": h,
-                         "nodes": nx * ny, **errors, "rate": rate})
+            rows.append({"weight": label, "cells": cell, "correction": correction,
+                         "nx": nx, "ny": ny, "h": h, "nodes": nx * ny, **errors,
+                         "rate": rate})
             previous = (h, errors["energy"])
     return pd.DataFrame(rows)
 

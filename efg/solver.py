@@ -18,9 +18,10 @@ cells rebuilt there) for the displacement increment ``du`` and ``p_w`` at t_(n+1
 
 Newton's method linearises ``J sigma F^-T``: the material's consistent tangent, the
 rotation of the effective stress by the spin and the change of area and orientation
-(:func:`soil.kinematics.spatial_tangent`); the only approximation is that the spin's rotation acts on
-sigma' at t_(n+1) rather than on the rotated start-of-step stress, a difference of the
-order of the strain increment. A step converges when the displacement residual is
+(:func:`soil.kinematics.spatial_tangent`); the only approximation is that the spin's
+rotation acts on sigma' at t_(n+1) rather than on the rotated start-of-step stress, a
+difference of the order of the strain increment. The linear solver and the reuse of its
+factorisation within a step are those of :mod:`soil.linear`. A step converges when the displacement residual is
 below ``TOLERANCE`` times the force scale (stress scale x nodal spacing) and the continuity
 residual below ``TOLERANCE`` times the volume scale (area x stress scale / P-wave modulus).
 A step that does not converge, inverts a background cell or fails in the material is cut
@@ -45,7 +46,6 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from efg import vci
 from efg.assembly import Pattern, scatter, to_matrix
@@ -56,6 +56,7 @@ from efg.statics import background, cauchy_traction
 from soil.coupling import (MAX_ITERATIONS, TOLERANCE, Scales, axial_strain, march,
                            stretching_error)
 from soil.errors import ConvergenceError
+from soil.linear import backend, factorise, must_refactorise
 from soil.kinematics import (IDENTITY, in_plane, invariants, prescribed_increment,
                              spatial_tangent, strain_increment)
 from soil.results import Result, Snapshot
@@ -111,7 +112,8 @@ def solve(case, progress=True):
         Bad supports (too small a scale factor) and other invalid settings.
     """
     model = Model.build(case)
-    stats = {"timings": {"cells_s": 0.0, "shape_functions_s": 0.0, "assembly_s": 0.0,
+    stats = {"factorisations": 0,
+             "timings": {"cells_s": 0.0, "shape_functions_s": 0.0, "assembly_s": 0.0,
                          "solve_s": 0.0, "material_s": 0.0}}
     tic = time.perf_counter()
     history, snapshots = march(
@@ -122,7 +124,7 @@ def solve(case, progress=True):
         stats=stats, progress=progress, desc=f"efg {case.name}")
     stats["timings"]["total_s"] = time.perf_counter() - tic
     summary = {"steps": len(history), "dofs": 3 * len(case.nodes()), "tolerance": TOLERANCE,
-               **stats, **_penalties(model, case.times())}
+               "linear_solver": backend(), **stats, **_penalties(model, case.times())}
     return Result(case, "efg", case.efg.to_dict(), history, snapshots, summary)
 
 
@@ -159,7 +161,7 @@ def _step(model, points, t0, t1, stats):
     plate_force = case.plate_force(t1)
 
     du, p, plate = np.zeros(2 * n), points.p.copy(), points.plate
-    lam = 0.0
+    lam, lu, previous = 0.0, None, np.inf
     for iteration in range(1, MAX_ITERATIONS + 1):
         H = _gradient(su, du, n)
         F = np.eye(2) + H
@@ -218,6 +220,14 @@ def _step(model, points, t0, t1, stats):
             raise ConvergenceError(f"Newton residual {residual:.2e} after {iteration} "
                                    "iterations")
 
+        if not must_refactorise(lu, residual, previous):
+            previous = residual
+            tic = time.perf_counter()
+            dx = lu.solve(-R)
+            stats["timings"]["solve_s"] += time.perf_counter() - tic
+            du, p, plate, lam = _advance(dx, du, p, plate, lam, n, bc, model)
+            continue
+
         # tangent
         tic = time.perf_counter()
         A = spatial_tangent(tangent, in_plane(stress), sig)
@@ -241,18 +251,25 @@ def _step(model, points, t0, t1, stats):
         K = _bordered(K, disc, n, rigid_w, c_mean, model.scales.pin_pressure)
         stats["timings"]["assembly_s"] += time.perf_counter() - tic
         tic = time.perf_counter()
-        dx = spla.spsolve(K, -R)
+        lu = factorise(K, groups=np.concatenate([np.tile(np.arange(n), 3),
+                                                 np.full(K.shape[0] - 3 * n, -1)]))
+        stats["factorisations"] += 1
+        previous = residual
+        dx = lu.solve(-R)
         stats["timings"]["solve_s"] += time.perf_counter() - tic
-        du += dx[:2 * n]
-        p += dx[2 * n:3 * n]
-        extra = dx[3 * n:]
-        if bc.rigid.any():
-            plate += extra[0]
-            extra = extra[1:]
-        if model.scales.pin_pressure:
-            lam += extra[0]
+        du, p, plate, lam = _advance(dx, du, p, plate, lam, n, bc, model)
 
     return _finish(model, points, disc, du, p, plate, gap, plate_gap, dt), iteration, residual
+
+
+def _advance(dx, du, p, plate, lam, n, bc, model):
+    """Add a Newton correction ``dx = [du, p, plate?, lambda?]`` to the unknowns."""
+    extra = dx[3 * n:]
+    if bc.rigid.any():
+        plate, extra = plate + extra[0], extra[1:]
+    if model.scales.pin_pressure:
+        lam += extra[0]
+    return du + dx[:2 * n], p + dx[2 * n:3 * n], plate, lam
 
 
 def _finish(model, points, disc, du, p, plate, gap, plate_gap, dt):
