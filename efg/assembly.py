@@ -116,15 +116,36 @@ def _scatter(p_ptr, p_idx, a_colptr, a_points, a_entry, a_val, b_ptr, b_idx, b_v
 def to_matrix(pattern, values):
     """Global CSR matrix of a block, fields blocked: rows ``f * n_test + a``.
 
+    Built directly in CSR (no COO of blocks): row ``(f, a)`` holds the pattern row ``a``
+    once per trial field ``g``, at columns ``g * n_trial + b``.
+
     Parameters
     ----------
     pattern : Pattern
     values : ndarray, shape (ft, fs, nnz)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> pattern = Pattern(np.array([0, 2, 3]), np.array([0, 1, 1]), (2, 2))
+    >>> to_matrix(pattern, np.arange(6.0).reshape(1, 2, 3)).toarray()
+    array([[0., 1., 3., 4.],
+           [0., 2., 0., 5.]])
     """
-    blocks = [[sp.csr_matrix((values[f, g], pattern.indices, pattern.indptr),
-                             shape=pattern.shape) for g in range(values.shape[1])]
-              for f in range(values.shape[0])]
-    return sp.bmat(blocks, format="csr")
+    ft, fs, nnz = values.shape
+    (n_rows, n_cols), ptr = pattern.shape, pattern.indptr
+    lengths = np.diff(ptr)
+    row_ptr = np.concatenate([[0], np.cumsum(lengths * fs)])          # one test field
+    row = np.repeat(np.arange(n_rows), lengths * fs)
+    within = np.arange(fs * nnz) - row_ptr[row]
+    g, j = within // lengths[row], within % lengths[row]
+    gather = g * nnz + ptr[row] + j                                   # into values[f]
+    columns = g * n_cols + pattern.indices[ptr[row] + j]
+    indptr = np.concatenate([row_ptr[:-1] + f * fs * nnz for f in range(ft)]
+                            + [[ft * fs * nnz]])
+    return sp.csr_matrix((values.reshape(ft, fs * nnz)[:, gather].ravel(),
+                          np.tile(columns, ft), indptr),
+                         shape=(ft * n_rows, fs * n_cols))
 
 
 def elasticity_coefficients(weights, tangent):

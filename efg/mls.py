@@ -265,7 +265,12 @@ def _search(points, nodes, support, origin, size, shape, start, order):
     for p in range(len(points)):
         _scan(points[p], nodes, support, origin, size, shape, start, order, indices,
               indptr[p])
-        indices[indptr[p]:indptr[p + 1]].sort()
+        for k in range(indptr[p] + 1, indptr[p + 1]):    # insertion sort of a short row
+            node, m = indices[k], k
+            while m > indptr[p] and indices[m - 1] > node:
+                indices[m] = indices[m - 1]
+                m -= 1
+            indices[m] = node
     return indptr, indices
 
 
@@ -300,12 +305,17 @@ def _shape_kernel(points, nodes, support, indptr, indices, kind, c, rcond_min):
     phi, dx, dy = np.zeros(nnz), np.zeros(nnz), np.zeros(nnz)
     rcond = np.zeros(len(points))
     moments = np.empty((3, 3, 3))
+    inverse, gamma = np.empty((3, 3)), np.empty(3)
+    gamma_x, gamma_y, rhs = np.empty(3), np.empty(3), np.empty(3)
     for p in range(len(points)):
         start, stop = indptr[p], indptr[p + 1]
         if stop - start < 3:
             continue
         x, y = points[p, 0], points[p, 1]
-        h = support[indices[start:stop]].mean()
+        h = 0.0
+        for k in range(start, stop):
+            h += support[indices[k]]
+        h /= stop - start
         moments[:] = 0.0
         for k in range(start, stop):
             j = indices[k]
@@ -313,13 +323,13 @@ def _shape_kernel(points, nodes, support, indptr, indices, kind, c, rcond_min):
                                            kind, c)
             _accumulate(moments, (nodes[j, 0] - x) / h, (nodes[j, 1] - y) / h,
                         phi[k], dx[k], dy[k])
-        inverse, rcond[p] = _inverse3(moments[0])
+        rcond[p] = _inverse3(moments[0], inverse)
         if rcond[p] < rcond_min:
             phi[start:stop], dx[start:stop], dy[start:stop] = 0.0, 0.0, 0.0
             continue
-        gamma = inverse[:, 0].copy()
-        gamma_x = _gamma_derivative(inverse, moments[1], gamma, 1, h)
-        gamma_y = _gamma_derivative(inverse, moments[2], gamma, 2, h)
+        gamma[:] = inverse[:, 0]
+        _gamma_derivative(inverse, moments[1], gamma, 1, h, rhs, gamma_x)
+        _gamma_derivative(inverse, moments[2], gamma, 2, h, rhs, gamma_y)
         for k in range(start, stop):
             j = indices[k]
             bx, by = (nodes[j, 0] - x) / h, (nodes[j, 1] - y) / h
@@ -351,24 +361,22 @@ def _accumulate(moments, bx, by, w, wx, wy):
 
 
 @numba.njit(cache=True)
-def _gamma_derivative(inverse, moment_i, gamma, i, h):
-    """``gamma_,i = A^-1 (p_,i - A_,i gamma)`` with ``p_,i = e_i / h``."""
-    rhs = np.zeros(3)
-    rhs[i] = 1.0 / h
+def _gamma_derivative(inverse, moment_i, gamma, i, h, rhs, out):
+    """``out = gamma_,i = A^-1 (p_,i - A_,i gamma)`` with ``p_,i = e_i / h``."""
     for a in range(3):
+        rhs[a] = 1.0 / h if a == i else 0.0
         for e in range(3):
             rhs[a] -= moment_i[a, e] * gamma[e]
-    result = np.zeros(3)
     for a in range(3):
+        out[a] = 0.0
         for e in range(3):
-            result[a] += inverse[a, e] * rhs[e]
-    return result
+            out[a] += inverse[a, e] * rhs[e]
 
 
 @numba.njit(cache=True)
-def _inverse3(a):
-    """Inverse of a symmetric 3x3 matrix by cofactors and its 1-norm rcond (0 if singular)."""
-    inverse = np.empty((3, 3))
+def _inverse3(a, inverse):
+    """Inverse of a symmetric 3x3 matrix by cofactors into ``inverse``; returns its 1-norm
+    rcond (0 if singular)."""
     inverse[0, 0] = a[1, 1] * a[2, 2] - a[1, 2] ** 2
     inverse[0, 1] = a[0, 2] * a[1, 2] - a[0, 1] * a[2, 2]
     inverse[0, 2] = a[0, 1] * a[1, 2] - a[0, 2] * a[1, 1]
@@ -377,11 +385,14 @@ def _inverse3(a):
     inverse[2, 2] = a[0, 0] * a[1, 1] - a[0, 1] ** 2
     det = a[0, 0] * inverse[0, 0] + a[0, 1] * inverse[0, 1] + a[0, 2] * inverse[0, 2]
     if not det > 0:
-        return inverse, 0.0
+        return 0.0
     inverse[1, 0], inverse[2, 0], inverse[2, 1] = inverse[0, 1], inverse[0, 2], inverse[1, 2]
     inverse /= det
-    norm = np.abs(a).sum(axis=0).max() * np.abs(inverse).sum(axis=0).max()
-    return inverse, 1.0 / norm
+    norm_a, norm_inv = 0.0, 0.0
+    for e in range(3):
+        norm_a = max(norm_a, abs(a[0, e]) + abs(a[1, e]) + abs(a[2, e]))
+        norm_inv = max(norm_inv, abs(inverse[0, e]) + abs(inverse[1, e]) + abs(inverse[2, e]))
+    return 1.0 / (norm_a * norm_inv)
 
 
 def _require_regular(rcond, points, nodes, indptr, indices, weight, scale):

@@ -21,9 +21,10 @@ rotation of the effective stress by the spin and the change of area and orientat
 (:func:`soil.kinematics.spatial_tangent`); the only approximation is that the spin's
 rotation acts on sigma' at t_(n+1) rather than on the rotated start-of-step stress, a
 difference of the order of the strain increment. The linear solver and the reuse of its
-factorisation within a step are those of :mod:`soil.linear`. A step converges when the displacement residual is
-below ``TOLERANCE`` times the force scale (stress scale x nodal spacing) and the continuity
-residual below ``TOLERANCE`` times the volume scale (area x stress scale / P-wave modulus).
+factorisation within a step are those of :mod:`soil.linear`. A step converges when the
+displacement residual is below ``TOLERANCE`` times the force scale (stress scale x nodal
+spacing) and the continuity residual below ``TOLERANCE`` times the volume scale (area x
+stress scale / P-wave modulus).
 A step that does not converge, inverts a background cell or fails in the material is cut
 back (halved) up to ``soil.coupling.MAX_CUTS`` times before the run stops with one clear
 error.
@@ -231,23 +232,18 @@ def _step(model, points, t0, t1, stats):
         # tangent
         tic = time.perf_counter()
         A = spatial_tangent(tangent, in_plane(stress), sig)
-        uu = _reference(wJ[:, None, None, None, None] * A, Finv, Finv)
-        up = np.zeros((M, 2, 3, 1, 3))
-        up[:, :, 1:, 0, 0] = -fluid.biot_alpha * (wJ[:, None, None]
-                                                  * np.swapaxes(Finv, 1, 2))
-        pu = np.zeros((M, 1, 3, 2, 3))
-        pu[:, 0, 0, :, 1:] = up[:, :, 1:, 0, 0]
-        pp = np.zeros((M, 1, 3, 1, 3))
-        pp[:, 0, 0, 0, 0] = -fluid.storage * disc.w
-        pp[:, 0, 1, 0, 1] = pp[:, 0, 2, 0, 2] = -dt * fluid.mobility * disc.w
-        pen_p = np.zeros((len(disc.bp.weights), 1, 3, 1, 3))
-        pen_p[:, 0, 0, 0, 0] = -alpha_p * disc.bp.weights * bc.drained
+        coeff = np.zeros((M, 3, 3, 3, 3))        # fields (ux, uy, p_w) x (phi, d/dx, d/dy)
+        coeff[:, :2, :, :2, :] = _reference(wJ[:, None, None, None, None] * A, Finv, Finv)
+        coeff[:, :2, 1:, 2, 0] = -fluid.biot_alpha * (wJ[:, None, None]
+                                                     * np.swapaxes(Finv, 1, 2))
+        coeff[:, 2, 0, :2, 1:] = coeff[:, :2, 1:, 2, 0]
+        coeff[:, 2, 0, 2, 0] = -fluid.storage * disc.w
+        coeff[:, 2, 1, 2, 1] = coeff[:, 2, 2, 2, 2] = -dt * fluid.mobility * disc.w
+        pen = np.zeros((len(disc.bp.weights), 3, 3, 3, 3))
         constrained = bc.constrained | np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
-        K = sp.bmat([
-            [disc.block("uu", uu) + disc.block("bu", penalty_coefficients(
-                disc.bp, constrained, alpha_u)), disc.block("up", up)],
-            [disc.block("pu", pu), disc.block("pp", pp) + disc.block("bp", pen_p)]],
-            format="csc")
+        pen[:, :2, :, :2, :] = penalty_coefficients(disc.bp, constrained, alpha_u)
+        pen[:, 2, 0, 2, 0] = -alpha_p * disc.bp.weights * bc.drained
+        K = disc.tangent(coeff, pen)
         K = _bordered(K, disc, n, rigid_w, c_mean, model.scales.pin_pressure)
         stats["timings"]["assembly_s"] += time.perf_counter() - tic
         tic = time.perf_counter()
@@ -304,15 +300,36 @@ class _Discretisation:
     at_points: object
     patterns: dict
 
+    @property
+    def shared(self):
+        """True when u and p_w use the same shape functions: one three-field pattern."""
+        return self.tu is self.tp and self.su is self.sp and self.sub is self.spb
+
+    @property
+    def pairs(self):
+        """Block name: (test, trial) shape functions."""
+        if self.shared:
+            return {"domain": (self.tu, self.su), "boundary": (self.sub, self.sub)}
+        return {"uu": (self.tu, self.su), "up": (self.tu, self.sp), "pu": (self.tp, self.su),
+                "pp": (self.tp, self.sp), "bu": (self.sub, self.sub),
+                "bp": (self.spb, self.spb)}
+
     def block(self, name, coeff):
         test, trial = self.pairs[name]
         return to_matrix(self.patterns[name], scatter(self.patterns[name], test, trial, coeff))
 
-    @property
-    def pairs(self):
-        return {"uu": (self.tu, self.su), "up": (self.tu, self.sp), "pu": (self.tp, self.su),
-                "pp": (self.tp, self.sp), "bu": (self.sub, self.sub),
-                "bp": (self.spb, self.spb)}
+    def tangent(self, coeff, boundary):
+        """Tangent of ``(ux, uy, p_w)``, fields blocked, from the integrand coefficients at
+        the integration points (M, 3, 3, 3, 3) and the boundary points (G, 3, 3, 3, 3)."""
+        if self.shared:
+            return self.block("domain", coeff) + self.block("boundary", boundary)
+        u, p = slice(0, 2), slice(2, 3)
+        return sp.bmat([
+            [self.block("uu", coeff[:, u, :, u]) + self.block("bu", boundary[:, u, :, u]),
+             self.block("up", coeff[:, u, :, p])],
+            [self.block("pu", coeff[:, p, :, u]),
+             self.block("pp", coeff[:, p, :, p]) + self.block("bp", boundary[:, p, :, p])]],
+            format="csr")
 
 
 @dataclass

@@ -1,0 +1,81 @@
+"""The linear solver of both coupled solvers (soil.linear): back-ends and reuse."""
+
+import importlib.util
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import efg.solver
+import fem_reference.solver
+from soil.errors import ConvergenceError, InputError
+from soil.linear import backend, factorise
+from soil.problems import load_case
+
+PARDISO = importlib.util.find_spec("pypardiso") is not None
+
+
+def saddle(n=40, seed=0):
+    """An undrained-like u-p matrix: SPD displacement block, zero pressure block."""
+    rng = np.random.default_rng(seed)
+    a = sp.random(2 * n, 2 * n, density=0.1, random_state=seed)
+    A = a @ a.T + sp.eye(2 * n) * 2 * n
+    B = sp.random(n, 2 * n, density=0.2, random_state=seed + 1) + sp.eye(n, 2 * n)
+    K = sp.bmat([[A, B.T], [B, None]], format="csr")
+    groups = np.concatenate([np.arange(n), np.arange(n), np.arange(n)])
+    return K, groups, rng.standard_normal(3 * n)
+
+
+def test_unknown_backend_is_named(monkeypatch):
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "mumps")
+    with pytest.raises(InputError, match="SOILWATER_LINEAR_SOLVER"):
+        backend()
+
+
+@pytest.mark.parametrize("name", ["superlu", "pardiso"])
+def test_saddle_point_solve(monkeypatch, name):
+    if name == "pardiso" and not PARDISO:
+        pytest.skip("pypardiso is not installed (extra soilwater[fast])")
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", name)
+    K, groups, b = saddle()
+    for g in (None, groups):
+        x = factorise(K, groups=g).solve(b)
+        assert np.abs(K @ x - b).max() < 1e-9 * np.abs(b).max()
+
+
+def test_singular_tangent_is_a_convergence_error(monkeypatch):
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "superlu")
+    with pytest.raises(ConvergenceError, match="singular"):
+        factorise(sp.csr_matrix(np.array([[1.0, 1.0], [1.0, 1.0]])))
+
+
+def compression(material=None, steps=4):
+    case = load_case("unconfined-compression", [f"time.steps={steps}", "time.end=2.0"])
+    if material:
+        import dataclasses
+        case = dataclasses.replace(case, material_spec=material)
+    return case
+
+
+@pytest.mark.parametrize("solve", [efg.solver.solve,
+                                   lambda c, progress: fem_reference.solver.solve(
+                                       c, "fem-p1p1", progress=progress)])
+def test_elastic_steps_reuse_one_factorisation(monkeypatch, solve):
+    """Modified Newton: a linear elastic skeleton needs one factorisation per step."""
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "superlu")
+    elastic = (("model", "elastic"), ("E", 200.0), ("nu", 0.3), ("p0", 3.0))
+    result = solve(compression(elastic), progress=False)
+    assert result.summary["factorisations"] < result.history.iterations.sum()
+    assert result.summary["factorisations"] <= len(result.history) + 1
+
+
+@pytest.mark.skipif(not PARDISO, reason="pypardiso is not installed (soilwater[fast])")
+def test_pardiso_and_superlu_give_the_same_steps(monkeypatch):
+    """Both back-ends converge to the same Newton tolerance: EFG Cam-clay paths agree."""
+    runs = {}
+    for name in ("superlu", "pardiso"):
+        monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", name)
+        runs[name] = efg.solver.solve(compression(), progress=False).history
+    for column in ("p", "q", "eps_a"):
+        assert np.allclose(runs["pardiso"][column], runs["superlu"][column],
+                           rtol=1e-7, atol=1e-9)
