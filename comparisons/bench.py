@@ -1,10 +1,28 @@
-"""``make bench``: speed as ratios against scikit-fem in the same run (never timed tests).
+"""``make bench``: speed and scale as ratios against scikit-fem in the same run.
 
-So far: EFG shape functions and gradients against scikit-fem ``CellBasis`` construction
-for the same number of quadrature points (P1 triangles on the Delaunay triangulation of
-the same nodes, 3-point rule, so both evaluate at the same points).
+Two measurements, both on this machine in one command (never timed tests):
+
+1. **One coupled step** of the unconfined-compression geometry (grid layout, 3 x 4 m, one
+   step of 0.2 % axial strain) at about 10^3, 3 x 10^3, ..., 10^5 nodes, with the Cam-clay
+   skeleton of the case and with a linear elastic one, for ``efg``, ``fem-p1p1`` and
+   ``fem-th`` on the same vertices. The solvers' own phase timers give shape functions (FEM:
+   basis construction), background cells (EFG only), assembly of the tangent, linear solve
+   (factorisations and back-substitutions), constitutive update, and the whole step. Each
+   run is a forked child process, so its peak resident memory is its own.
+2. **Shape functions alone**: MLS values and gradients against scikit-fem's
+   ``CellBasis`` construction (P1 and P2) at the same quadrature points (3 per triangle of
+   the Delaunay triangulation of the nodes).
+
+Writes ``reports/bench.md`` (targets of issue 7, ratios, growth exponents, memory),
+``reports/tables/bench.csv`` (every timing) and ``reports/figures/bench.png``.
 """
 
+import concurrent.futures
+import dataclasses
+import multiprocessing
+import os
+import platform
+import resource
 import time
 
 import numpy as np
@@ -13,7 +31,87 @@ import skfem
 
 from efg.mls import ShapeFunctions
 from efg.quadrature import delaunay_cells
+from soil.linear import backend
 from soil.problems import load_case
+
+SIZES = (1_000, 3_000, 10_000, 30_000, 100_000)
+METHODS = ("efg", "fem-p1p1", "fem-th")
+MATERIALS = ("cam-clay", "elastic")
+#: Linear elastic skeleton of the elastic runs (kPa), at the case's p'0.
+ELASTIC = (("model", "elastic"), ("E", 200.0), ("nu", 0.3), ("p0", 3.0))
+#: Phase: (EFG timer, FEM timer) in the solvers' ``summary["timings"]``.
+PHASES = {"shape functions": ("shape_functions_s", "basis_s"),
+          "cells": ("cells_s", None),
+          "assembly": ("assembly_s", "assembly_s"),
+          "solve": ("solve_s", "solve_s"),
+          "constitutive": ("material_s", "material_s"),
+          "step": ("total_s", "total_s")}
+
+
+def compression(nodes, material="cam-clay"):
+    """The benchmark case: unconfined compression on a grid of about ``nodes`` nodes.
+
+    Parameters
+    ----------
+    nodes : int
+        Wanted node count; the grid is (3k + 1) x (4k + 1) with square spacing.
+    material : {"cam-clay", "elastic"}
+        The case's Cam-clay (Table 1) or the linear elastic :data:`ELASTIC`.
+
+    Examples
+    --------
+    >>> len(compression(1000).nodes())
+    1036
+    """
+    k = max(1, round(np.sqrt(nodes / 12)))
+    case = load_case("unconfined-compression", [
+        f"discretisation.nx={3 * k + 1}", f"discretisation.ny={4 * k + 1}",
+        "discretisation.layout=grid", "time.steps=1", "time.end=0.2"])
+    if material == "elastic":
+        case = dataclasses.replace(case, material_spec=ELASTIC)
+    return case
+
+
+def one_step(method, nodes, material):
+    """Run one step and return its phase times [s], counts and peak memory [MB]."""
+    import efg.solver
+    import fem_reference.solver
+
+    case = compression(nodes, material)
+    tic = time.perf_counter()
+    result = (efg.solver.solve(case, progress=False) if method == "efg"
+              else fem_reference.solver.solve(case, method, progress=False))
+    wall = time.perf_counter() - tic
+    summary = result.summary
+    column = 0 if method == "efg" else 1
+    row = {"method": method, "material": material, "nodes": len(case.nodes()),
+           "dofs": summary["dofs"], "iterations": int(result.history.iterations.sum()),
+           "factorisations": summary["factorisations"], "wall_s": wall}
+    for phase, timers in PHASES.items():
+        row[phase] = summary["timings"][timers[column]] if timers[column] else np.nan
+    row["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return row
+
+
+def in_child(fn, *args):
+    """``fn(*args)`` in a forked child process (its own peak memory), result returned."""
+    context = multiprocessing.get_context("fork")
+    with concurrent.futures.ProcessPoolExecutor(1, mp_context=context) as pool:
+        return pool.submit(fn, *args).result()
+
+
+def steps(sizes=SIZES, methods=METHODS, materials=MATERIALS, progress=print):
+    """One step of every method, material and size; one row each (see :func:`one_step`)."""
+    for method in methods:                       # compile numba kernels, load MKL
+        one_step(method, 200, "cam-clay")
+    rows = []
+    for nodes in sizes:
+        for material in materials:
+            for method in methods:
+                rows.append(in_child(one_step, method, nodes, material))
+                progress(f"{method:9s} {material:8s} {rows[-1]['nodes']:7d} nodes: "
+                         f"step {rows[-1]['step']:8.2f} s, peak {rows[-1]['peak_mb']:6.0f} MB")
+    return pd.DataFrame(rows)
 
 
 def best_of(fn, repeat=3):
@@ -27,42 +125,192 @@ def best_of(fn, repeat=3):
     return min(times)
 
 
-def shape_functions(n_side=183, weight="quartic", scale=1.3):
-    """Time MLS shape functions + gradients and scikit-fem basis construction.
-
-    Parameters
-    ----------
-    n_side : int
-        Nodes per side of the square grid (183 gives ~2e5 quadrature points).
+def shape_functions(sizes=SIZES, weight="quartic", scale=1.3):
+    """MLS values + gradients against ``CellBasis`` construction at the same points.
 
     Returns
     -------
     pandas.DataFrame
-        One row: nodes, points, both times [s] and their ratio EFG / scikit-fem.
+        Per size: nodes, quadrature points, EFG time and P1 / P2 basis times [s].
     """
-    case = load_case("patch-test", [f"discretisation.nx={n_side}",
-                                    f"discretisation.ny={n_side}"])
-    nodes = case.nodes()
-    quad = delaunay_cells(nodes, nodes[case.boundary_loop()], order=2)
-    efg = best_of(lambda: ShapeFunctions.build(nodes, quad.points, weight, scale))
-    mesh = skfem.MeshTri(np.ascontiguousarray(nodes.T), np.ascontiguousarray(quad.triangles.T))
     rows = []
-    for name, element in (("P1", skfem.ElementTriP1()), ("P2", skfem.ElementTriP2())):
-        fem = best_of(lambda: skfem.CellBasis(mesh, element, intorder=2))
-        rows.append({"phase": f"shape functions + gradients vs CellBasis({name})",
-                     "nodes": len(nodes), "points": len(quad.weights), "efg_s": efg,
-                     "skfem_s": fem, "ratio": efg / fem, "target": 1.5})
+    for nodes in sizes:
+        case = compression(nodes)
+        x = case.nodes()
+        quad = delaunay_cells(x, x[case.boundary_loop()], order=2)
+        mesh = skfem.MeshTri(np.ascontiguousarray(x.T),
+                             np.ascontiguousarray(quad.triangles.T))
+        row = {"nodes": len(x), "points": len(quad.weights),
+               "efg_s": best_of(lambda: ShapeFunctions.build(x, quad.points, weight, scale))}
+        for name, element in (("P1", skfem.ElementTriP1()), ("P2", skfem.ElementTriP2())):
+            row[f"{name}_s"] = best_of(
+                lambda element=element: skfem.CellBasis(mesh, element, intorder=2))
+        rows.append(row)
     return pd.DataFrame(rows)
 
 
-def run(path="reports/bench.md"):
-    """Run every benchmark, print the table and write it as Markdown."""
+def exponent(nodes, seconds):
+    """Least-squares slope of log(time) against log(nodes): the growth exponent."""
+    nodes, seconds = np.asarray(nodes, float), np.asarray(seconds, float)
+    keep = seconds > 0
+    if keep.sum() < 2:
+        return np.nan
+    return float(np.polyfit(np.log(nodes[keep]), np.log(seconds[keep]), 1)[0])
+
+
+def at(x, xs, ys):
+    """Log-log interpolation of the measured ``(xs, ys)`` at ``x`` (NaN outside)."""
+    xs, ys = np.asarray(xs, float), np.asarray(ys, float)
+    if not xs.min() <= x <= xs.max():
+        return np.nan
+    return float(np.exp(np.interp(np.log(x), np.log(xs), np.log(ys))))
+
+
+def ratios(table):
+    """EFG / FEM per phase at equal nodes (same grid), for each material and size."""
+    rows = []
+    for (material, nodes), group in table.groupby(["material", "nodes"], sort=False):
+        by = group.set_index("method")
+        for fem in METHODS[1:]:
+            if "efg" not in by.index or fem not in by.index:
+                continue
+            row = {"material": material, "nodes": nodes, "against": fem}
+            for phase in PHASES:
+                row[phase] = by.loc["efg", phase] / by.loc[fem, phase]
+            rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def exponents(table):
+    """Growth exponent of every phase, per method and material."""
+    rows = []
+    for (method, material), group in table.groupby(["method", "material"], sort=False):
+        row = {"method": method, "material": material}
+        for phase in PHASES:
+            row[phase] = exponent(group.nodes, group[phase])
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def targets(table, shapes, growth):
+    """Issue 7's targets: measured value, target and verdict, one row each."""
+    rows = []
+    largest = shapes.iloc[-1]
+    for basis in ("P2", "P1"):
+        rows.append((f"shape functions / CellBasis({basis}), same points",
+                     f"{int(largest.nodes)} nodes, {int(largest.points)} points",
+                     largest.efg_s / largest[f"{basis}_s"], 1.5))
+    for material in MATERIALS:
+        efg = table[(table.method == "efg") & (table.material == material)]
+        th = table[(table.method == "fem-th") & (table.material == material)]
+        per = lambda frame: frame.assembly / frame.factorisations  # noqa: E731
+        for _, row in efg.iterrows():
+            fem = at(row.dofs, th.dofs, per(th))
+            if fem == fem:
+                rows.append((f"assembly per tangent / fem-th at equal DOFs ({material})",
+                             f"{row.nodes} nodes, {row.dofs} DOFs",
+                             row.assembly / row.factorisations / fem, 2.0))
+        p1 = table[(table.method == "fem-p1p1") & (table.material == material)]
+        for nodes in (10_000, 100_000):
+            e = efg[np.isclose(efg.nodes, nodes, rtol=0.1)]
+            f = p1[np.isclose(p1.nodes, nodes, rtol=0.1)]
+            if len(e) and len(f):
+                rows.append((f"whole step / fem-p1p1 at equal nodes ({material})",
+                             f"{e.nodes.iloc[0]} nodes", e.step.iloc[0] / f.step.iloc[0],
+                             3.0))
+    for _, row in growth[growth.method == "efg"].iterrows():
+        for phase in PHASES:
+            if phase != "solve":
+                rows.append((f"growth exponent, EFG {phase} ({row.material})",
+                             f"{table.nodes.min()} to {table.nodes.max()} nodes",
+                             row[phase], 1.2))
+    frame = pd.DataFrame(rows, columns=["target", "where", "measured", "limit"])
+    frame["met"] = np.where(frame.measured <= frame.limit, "yes", "**no**")
+    return frame
+
+
+def figure(table, path):
+    """Log-log time against nodes, one panel per phase; Cam-clay solid, elastic dashed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 3, figsize=(12, 7), sharex=True, constrained_layout=True)
+    colours = dict(zip(METHODS, ("C0", "C1", "C2"), strict=True))
+    for ax, phase in zip(axes.ravel(), PHASES, strict=True):
+        for (method, material), group in table.groupby(["method", "material"], sort=False):
+            if group[phase].notna().any():
+                ax.loglog(group.nodes, group[phase], "o-" if material == "cam-clay" else "s--",
+                          color=colours[method], label=f"{method}, {material}", ms=4)
+        n = np.array([table.nodes.min(), table.nodes.max()], float)
+        reference = table[table.method == "efg"][phase].min()
+        ax.loglog(n, reference * (n / n[0]) ** 1.2, ":", color="grey", label="N^1.2")
+        ax.set_title(phase)
+        ax.set_xlabel("nodes")
+        ax.set_ylabel("time [s]")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle("One step of unconfined compression (0.2 % strain): phase times")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def machine():
+    """One line naming the machine, the solver back-end and the main versions."""
+    import numba
+    import scipy
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as fh:
+            cpu = next(line.split(":", 1)[1].strip() for line in fh
+                       if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    return (f"{cpu}, {os.cpu_count()} cores; linear solver {backend()}; Python "
+            f"{platform.python_version()}, NumPy {np.__version__}, SciPy {scipy.__version__}, "
+            f"scikit-fem {skfem.__version__}, numba {numba.__version__}")
+
+
+def run(path="reports/bench.md", sizes=SIZES):
+    """Run both benchmarks, write the Markdown, CSV and figure, and print the targets."""
     from comparisons.tables import to_markdown
 
-    table = shape_functions()
-    text = ("# Benchmarks\n\nRatios EFG / scikit-fem measured in one run on this machine "
-            "(best of 3 after a warm-up).\n\n" + to_markdown(table))
+    root = os.path.dirname(path) or "."
+    os.makedirs(os.path.join(root, "tables"), exist_ok=True)
+    os.makedirs(os.path.join(root, "figures"), exist_ok=True)
+    tic = time.perf_counter()
+    table = steps(sizes)
+    shapes = shape_functions(sizes)
+    growth = exponents(table)
+    goals = targets(table, shapes, growth)
+    table.to_csv(os.path.join(root, "tables", "bench.csv"), index=False)
+    figure(table, os.path.join(root, "figures", "bench.png"))
+    largest = table[table.nodes == table.nodes.max()]
+    memory = ", ".join(f"{r.method} {r.material} {r.peak_mb:.0f} MB"
+                       for r in largest.itertuples())
+    shapes = shapes.assign(over_P1=shapes.efg_s / shapes.P1_s,
+                           over_P2=shapes.efg_s / shapes.P2_s)
+    text = "\n".join([
+        "# Benchmarks (`make bench`)", "",
+        f"Measured in one run of {time.perf_counter() - tic:.0f} s on {machine()}. "
+        "One step of the unconfined-compression geometry (grid layout, 0.2 % axial "
+        "strain) per method, material and size, each in its own forked process. "
+        "Times are the solvers' phase timers [s]; the step includes everything the "
+        "solver does in it (shape functions or bases, cells, every Newton iteration). "
+        "EFG assembly includes building the sparse pattern of the step.", "",
+        "## Targets (issue 7)", "", to_markdown(goals, "{:.3g}"),
+        "## Phase times [s]", "",
+        to_markdown(table.drop(columns="wall_s"), "{:.3g}"),
+        "## EFG / FEM at equal nodes", "", to_markdown(ratios(table), "{:.3g}"),
+        "## Growth exponents (least squares of log time on log nodes)", "",
+        to_markdown(growth, "{:.2f}"),
+        "## Shape functions alone: MLS against CellBasis at the same points [s]", "",
+        to_markdown(shapes, "{:.3g}"),
+        f"Peak resident memory at {largest.nodes.max()} nodes (whole process): {memory}.",
+        "", "![bench](figures/bench.png)", ""])
     with open(path, "w") as fh:
         fh.write(text)
-    print(text)
+    print(to_markdown(goals, "{:.3g}"))
     return table

@@ -73,6 +73,8 @@ def _parser():
     p = sub.add_parser("bench", help="speed ratios against scikit-fem (writes "
                        "reports/bench.md)")
     p.add_argument("--out", default="reports/bench.md", help="Markdown table")
+    p.add_argument("--sizes", default="1000,3000,10000,30000,100000",
+                   help="comma-separated node counts (default 1e3 to 1e5)")
     p.set_defaults(func=_bench)
 
     p = sub.add_parser("report", help="regenerate every figure and table under reports/")
@@ -161,7 +163,7 @@ def _check(args):
 def _bench(args):
     from comparisons.bench import run
 
-    run(args.out)
+    run(args.out, sizes=[int(n) for n in args.sizes.split(",")])
 
 
 def _report(args):
