@@ -17,11 +17,11 @@ Writes ``reports/bench.md`` (targets of issue 7, ratios, growth exponents, memor
 ``reports/tables/bench.csv`` (every timing) and ``reports/figures/bench.png``.
 """
 
-import concurrent.futures
 import dataclasses
 import multiprocessing
 import os
 import platform
+import queue
 import resource
 import time
 
@@ -37,6 +37,8 @@ from soil.problems import load_case
 SIZES = (1_000, 3_000, 10_000, 30_000, 100_000)
 METHODS = ("efg", "fem-p1p1", "fem-th")
 MATERIALS = ("cam-clay", "elastic")
+#: Seconds after which one run is stopped (recorded, not timed).
+TIME_LIMIT = 240.0
 #: Linear elastic skeleton of the elastic runs (kPa), at the case's p'0.
 ELASTIC = (("model", "elastic"), ("E", 200.0), ("nu", 0.3), ("p0", 3.0))
 #: Phase: (EFG timer, FEM timer) in the solvers' ``summary["timings"]``.
@@ -86,31 +88,52 @@ def one_step(method, nodes, material):
     column = 0 if method == "efg" else 1
     row = {"method": method, "material": material, "nodes": len(case.nodes()),
            "dofs": summary["dofs"], "iterations": int(result.history.iterations.sum()),
-           "factorisations": summary["factorisations"], "wall_s": wall}
+           "factorisations": summary["factorisations"], "wall_s": wall, "status": "ok"}
     for phase, timers in PHASES.items():
         row[phase] = summary["timings"][timers[column]] if timers[column] else np.nan
     row["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return row
 
 
-def in_child(fn, *args):
-    """``fn(*args)`` in a forked child process (its own peak memory), result returned."""
+def in_child(fn, *args, timeout=None):
+    """``fn(*args)`` in a forked child process (its own peak memory); None if the child
+    has not answered after ``timeout`` seconds (it is then killed)."""
     context = multiprocessing.get_context("fork")
-    with concurrent.futures.ProcessPoolExecutor(1, mp_context=context) as pool:
-        return pool.submit(fn, *args).result()
+    answers = context.Queue()
+    child = context.Process(target=lambda: answers.put(fn(*args)))
+    child.start()
+    try:
+        return answers.get(timeout=timeout)
+    except queue.Empty:
+        return None
+    finally:
+        child.kill()
+        child.join()
 
 
-def steps(sizes=SIZES, methods=METHODS, materials=MATERIALS, progress=print):
-    """One step of every method, material and size; one row each (see :func:`one_step`)."""
+def steps(sizes=SIZES, methods=METHODS, materials=MATERIALS, limit=TIME_LIMIT, progress=print):
+    """One step of every method, material and size; one row each (see :func:`one_step`).
+
+    A run still going after ``limit`` seconds is stopped and kept as a row of NaN times
+    with its status, so one pathological run cannot hold the benchmark.
+    """
     for method in methods:                       # compile numba kernels, load MKL
         one_step(method, 200, "cam-clay")
     rows = []
     for nodes in sizes:
         for material in materials:
             for method in methods:
-                rows.append(in_child(one_step, method, nodes, material))
-                progress(f"{method:9s} {material:8s} {rows[-1]['nodes']:7d} nodes: "
-                         f"step {rows[-1]['step']:8.2f} s, peak {rows[-1]['peak_mb']:6.0f} MB")
+                row = in_child(one_step, method, nodes, material, timeout=limit)
+                if row is None:
+                    row = {"method": method, "material": material,
+                           "nodes": len(compression(nodes).nodes()),
+                           "status": f"stopped at {limit:.0f} s"}
+                    progress(f"{method:9s} {material:8s} {row['nodes']:7d} nodes: "
+                             f"{row['status']}")
+                else:
+                    progress(f"{method:9s} {material:8s} {row['nodes']:7d} nodes: step "
+                             f"{row['step']:8.2f} s, peak {row['peak_mb']:6.0f} MB")
+                rows.append(row)
     return pd.DataFrame(rows)
 
 
@@ -215,8 +238,12 @@ def targets(table, shapes, growth):
             e = efg[np.isclose(efg.nodes, nodes, rtol=0.1)]
             f = p1[np.isclose(p1.nodes, nodes, rtol=0.1)]
             if len(e) and len(f):
+                stopped = f.status.iloc[0] != "ok"
                 rows.append((f"whole step / fem-p1p1 at equal nodes ({material})",
-                             f"{e.nodes.iloc[0]} nodes", e.step.iloc[0] / f.step.iloc[0],
+                             f"{e.nodes.iloc[0]} nodes"
+                             + (f" (fem-p1p1 {f.status.iloc[0]}: an upper bound)"
+                                if stopped else ""),
+                             e.step.iloc[0] / (TIME_LIMIT if stopped else f.step.iloc[0]),
                              3.0))
     for _, row in growth[growth.method == "efg"].iterrows():
         for phase in PHASES:
@@ -288,7 +315,8 @@ def run(path="reports/bench.md", sizes=SIZES):
     table.to_csv(os.path.join(root, "tables", "bench.csv"), index=False)
     figure(table, os.path.join(root, "figures", "bench.png"))
     largest = table[table.nodes == table.nodes.max()]
-    memory = ", ".join(f"{r.method} {r.material} {r.peak_mb:.0f} MB"
+    memory = ", ".join(f"{r.method} {r.material} " + (f"{r.peak_mb:.0f} MB" if r.status == "ok"
+                                                        else r.status)
                        for r in largest.itertuples())
     shapes = shapes.assign(over_P1=shapes.efg_s / shapes.P1_s,
                            over_P2=shapes.efg_s / shapes.P2_s)
