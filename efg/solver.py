@@ -221,36 +221,30 @@ def _step(model, points, t0, t1, stats):
             raise ConvergenceError(f"Newton residual {residual:.2e} after {iteration} "
                                    "iterations")
 
-        if not must_refactorise(lu, residual, previous):
-            previous = residual
+        if must_refactorise(lu, residual, previous):      # tangent, then factorise it
             tic = time.perf_counter()
-            dx = lu.solve(-R)
-            stats["timings"]["solve_s"] += time.perf_counter() - tic
-            du, p, plate, lam = _advance(dx, du, p, plate, lam, n, bc, model)
-            continue
-
-        # tangent
-        tic = time.perf_counter()
-        A = spatial_tangent(tangent, in_plane(stress), sig)
-        coeff = np.zeros((M, 3, 3, 3, 3))        # fields (ux, uy, p_w) x (phi, d/dx, d/dy)
-        coeff[:, :2, :, :2, :] = _reference(wJ[:, None, None, None, None] * A, Finv, Finv)
-        coeff[:, :2, 1:, 2, 0] = -fluid.biot_alpha * (wJ[:, None, None]
-                                                     * np.swapaxes(Finv, 1, 2))
-        coeff[:, 2, 0, :2, 1:] = coeff[:, :2, 1:, 2, 0]
-        coeff[:, 2, 0, 2, 0] = -fluid.storage * disc.w
-        coeff[:, 2, 1, 2, 1] = coeff[:, 2, 2, 2, 2] = -dt * fluid.mobility * disc.w
-        pen = np.zeros((len(disc.bp.weights), 3, 3, 3, 3))
-        constrained = bc.constrained | np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
-        pen[:, :2, :, :2, :] = penalty_coefficients(disc.bp, constrained, alpha_u)
-        pen[:, 2, 0, 2, 0] = -alpha_p * disc.bp.weights * bc.drained
-        K = disc.tangent(coeff, pen)
-        K = _bordered(K, disc, n, rigid_w, c_mean, model.scales.pin_pressure)
-        stats["timings"]["assembly_s"] += time.perf_counter() - tic
-        tic = time.perf_counter()
-        lu = factorise(K, groups=np.concatenate([np.tile(np.arange(n), 3),
-                                                 np.full(K.shape[0] - 3 * n, -1)]))
-        stats["factorisations"] += 1
+            A = spatial_tangent(tangent, in_plane(stress), sig)
+            coeff = np.zeros((M, 3, 3, 3, 3))        # fields (ux, uy, p_w) x (phi, d/dx, d/dy)
+            coeff[:, :2, :, :2, :] = _reference(wJ[:, None, None, None, None] * A, Finv, Finv)
+            coeff[:, :2, 1:, 2, 0] = -fluid.biot_alpha * (wJ[:, None, None]
+                                                         * np.swapaxes(Finv, 1, 2))
+            coeff[:, 2, 0, :2, 1:] = coeff[:, :2, 1:, 2, 0]
+            coeff[:, 2, 0, 2, 0] = -fluid.storage * disc.w
+            coeff[:, 2, 1, 2, 1] = coeff[:, 2, 2, 2, 2] = -dt * fluid.mobility * disc.w
+            pen = np.zeros((len(disc.bp.weights), 3, 3, 3, 3))
+            constrained = bc.constrained | np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
+            pen[:, :2, :, :2, :] = penalty_coefficients(disc.bp, constrained, alpha_u)
+            pen[:, 2, 0, 2, 0] = -alpha_p * disc.bp.weights * bc.drained
+            K = disc.tangent(coeff, pen)
+            K = _bordered(K, disc, n, rigid_w, c_mean, model.scales.pin_pressure)
+            toc = time.perf_counter()
+            stats["timings"]["assembly_s"] += toc - tic
+            lu = factorise(K, groups=np.concatenate([np.tile(np.arange(n), 3),
+                                                     np.full(K.shape[0] - 3 * n, -1)]))
+            stats["factorisations"] += 1
+            stats["timings"]["solve_s"] += time.perf_counter() - toc
         previous = residual
+        tic = time.perf_counter()
         dx = lu.solve(-R)
         stats["timings"]["solve_s"] += time.perf_counter() - tic
         du, p, plate, lam = _advance(dx, du, p, plate, lam, n, bc, model)
