@@ -226,12 +226,11 @@ def targets(table, shapes, growth):
     for material in MATERIALS:
         efg = table[(table.method == "efg") & (table.material == material)]
         th = table[(table.method == "fem-th") & (table.material == material)]
-        per = lambda frame: frame.assembly / frame.factorisations  # noqa: E731
         for _, row in efg.iterrows():
-            fem = at(row.dofs, th.dofs, per(th))
+            fem = at(row.dofs, th.dofs, th.assembly / th.factorisations)
             if fem == fem:
                 rows.append((f"assembly per tangent / fem-th at equal DOFs ({material})",
-                             f"{row.nodes} nodes, {row.dofs} DOFs",
+                             f"{row.nodes} nodes, {int(row.dofs)} DOFs",
                              row.assembly / row.factorisations / fem, 2.0))
         p1 = table[(table.method == "fem-p1p1") & (table.material == material)]
         for nodes in (10_000, 100_000):
