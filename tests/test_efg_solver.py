@@ -31,6 +31,18 @@ def test_halving_the_time_step_changes_the_path_by_less_than_half_a_percent(comp
     assert max(np.abs(coarse.p - fine.p).max(), np.abs(coarse.q - fine.q).max()) < 0.005 * p0
 
 
+def test_a_stiff_penalty_converges_within_round_off():
+    """Penalty 1e10: the boundary rows carry round-off of about 1e-6 of the force scale,
+    above the tolerance; the residual is judged beyond that level, so the step converges
+    (it failed after six halvings before) and agrees with the default penalty's."""
+    grid = ["discretisation.nx=13", "discretisation.ny=17", "discretisation.layout=grid",
+            "time.steps=1", "time.end=0.2"]
+    stiff, default = (solve(load_case("unconfined-compression", grid + [f"efg.penalty={a}"]),
+                            progress=False) for a in (1e10, 1e6))
+    assert stiff.history.iterations.iloc[0] <= 6
+    assert stiff.history.q.iloc[0] == pytest.approx(default.history.q.iloc[0], rel=1e-5)
+
+
 def test_simple_shear_follows_the_driver():
     result = solve(load_case("simple-shear", ["time.steps=50"]), progress=False)
     assert result.history.gamma.iloc[-1] == pytest.approx(0.3, rel=1e-6)
