@@ -8,36 +8,43 @@ and derivative arrays share one pattern (:class:`efg.mls.ShapeFunctions`). A blo
 
 with ``S = (phi, dphi/dx, dphi/dy)`` of the test node a and trial node b, and ``coeff``
 holding the integration weight times the material or coupling coefficients. The node-node
-pattern of a block is that of ``Phi_test^T Phi_trial`` (nodes that share a point); it is
-computed once per step and every Newton iteration scatters into it: a numba kernel walks
-the pattern row by row (the test node), marks where each trial node's entry sits, and
-accumulates the integrand of every point in the test node's support; no search, no COO of
-duplicates.
+pattern of a block is that of ``sum Phi_test^T Phi_trial`` over its point sets (domain and
+boundary points: nodes that share a point); it is computed once per step. The global
+matrix has its fields blocked (row ``f n_test + a``, column ``g n_trial + b``) and its CSR
+layout follows from the node pattern, so a numba kernel adds every point's integrand
+straight into the global value array: it walks the pattern row by row (the test node),
+marks where each trial node's entry sits, and accumulates over the points in the test
+node's support only the (f, g, j) terms the coefficients use. No search, no COO of
+duplicates, no copy into a matrix.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numba
 import numpy as np
 import scipy.sparse as sp
 
 
-@dataclass(frozen=True)
+@dataclass
 class Pattern:
-    """Node-node CSR pattern of one block and the point incidence of its two sides."""
+    """Node-node CSR pattern of one block; the global layouts it implies are kept."""
 
     indptr: np.ndarray
     indices: np.ndarray
     shape: tuple
+    _layouts: dict = field(default_factory=dict, repr=False, compare=False)
 
     @classmethod
-    def build(cls, test, trial):
-        """Pattern of ``test.phi^T trial.phi`` (both :class:`ShapeFunctions`-like)."""
-        a = sp.csr_matrix((np.ones_like(test.phi.data), test.phi.indices, test.phi.indptr),
-                          shape=test.phi.shape)
-        b = sp.csr_matrix((np.ones_like(trial.phi.data), trial.phi.indices,
-                           trial.phi.indptr), shape=trial.phi.shape)
-        product = (a.T @ b).tocsr()
+    def build(cls, *pairs):
+        """Pattern of ``sum_k test_k.phi^T trial_k.phi`` over ``(test, trial)`` pairs of
+        :class:`ShapeFunctions`-like objects, each pair at one set of points."""
+        def incidence(*shapes):
+            blocks = [sp.csr_matrix((np.ones(s.phi.nnz), s.phi.indices, s.phi.indptr),
+                                    shape=s.phi.shape) for s in shapes]
+            return sp.vstack(blocks, format="csr")
+
+        product = (incidence(*(t for t, _ in pairs)).T
+                   @ incidence(*(b for _, b in pairs))).tocsr()
         product.sort_indices()
         return cls(product.indptr.astype(np.int64), product.indices.astype(np.int64),
                    product.shape)
@@ -47,105 +54,131 @@ class Pattern:
         """Stored entries per field pair."""
         return len(self.indices)
 
+    def zeros(self, ft, fs):
+        """A value array for ``ft`` test and ``fs`` trial fields, in the global layout."""
+        return np.zeros(ft * fs * self.nnz)
+
+    def matrix(self, values, ft, fs):
+        """Global CSR matrix, fields blocked, of values in the global layout.
+
+        Row ``(f, a)`` holds the pattern row ``a`` once per trial field ``g``, at columns
+        ``g * n_trial + b``; ``values`` is used as the matrix's data without a copy.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> pattern = Pattern(np.array([0, 2, 3]), np.array([0, 1, 1]), (2, 2))
+        >>> pattern.matrix(np.arange(6.0), 1, 2).toarray()
+        array([[0., 1., 2., 3.],
+               [0., 4., 0., 5.]])
+        """
+        if (ft, fs) not in self._layouts:   # int32 when it fits, as scipy would make it
+            small = ft * fs * max(self.nnz, *self.shape) <= np.iinfo(np.int32).max
+            self._layouts[ft, fs] = tuple(
+                a.astype(np.int32 if small else np.int64, copy=False)
+                for a in _layout(self.indptr, self.indices, ft, fs, self.shape[1]))
+        indptr, indices = self._layouts[ft, fs]
+        return sp.csr_matrix((values, indices, indptr),
+                             shape=(ft * self.shape[0], fs * self.shape[1]))
+
+
+@numba.njit(cache=True)
+def _layout(ptr, idx, ft, fs, n_cols):
+    """CSR row pointers and columns of the field-blocked matrix of a node pattern."""
+    n_rows, nnz = len(ptr) - 1, len(idx)
+    indptr = np.empty(ft * n_rows + 1, np.int64)
+    indices = np.empty(ft * fs * nnz, np.int64)
+    for f in range(ft):
+        for a in range(n_rows):
+            start, length = ptr[a], ptr[a + 1] - ptr[a]
+            base = f * fs * nnz + fs * start
+            indptr[f * n_rows + a] = base
+            for g in range(fs):
+                for k in range(length):
+                    indices[base + g * length + k] = g * n_cols + idx[start + k]
+    indptr[-1] = ft * fs * nnz
+    return indptr, indices
+
 
 def components(sf):
-    """``(3, nnz)`` array of (phi, dphi/dx, dphi/dy) values of a ShapeFunctions object."""
-    return np.stack([sf.phi.data, sf.dphi_dx.data, sf.dphi_dy.data])
+    """``(phi, dphi/dx, dphi/dy)`` value arrays (nnz,) of a ShapeFunctions object."""
+    return sf.phi.data, sf.dphi_dx.data, sf.dphi_dy.data
 
 
-def scatter(pattern, test, trial, coeff):
-    """Assemble one block's values on its pattern.
+def scatter(pattern, test, trial, coeff, out=None):
+    """Add one point set's integrand to a block's values in the global layout.
 
     Parameters
     ----------
     pattern : Pattern
-        From ``Pattern.build(test, trial)``.
+        From ``Pattern.build(..., (test, trial), ...)``.
     test, trial : ShapeFunctions
         Shape functions at the same integration points.
     coeff : ndarray, shape (M, ft, 3, fs, 3)
         Integrand coefficients at the M points, integration weight included.
+    out : ndarray, shape (ft * fs * pattern.nnz,), optional
+        Values to add to (``pattern.zeros(ft, fs)`` when not given).
 
     Returns
     -------
-    ndarray, shape (ft, fs, nnz)
-        Values of every field pair on the pattern.
+    ndarray
+        ``out``, for :meth:`Pattern.matrix`.
     """
-    out = np.zeros((coeff.shape[1], coeff.shape[3], pattern.nnz))
+    ft, fs = coeff.shape[1], coeff.shape[3]
+    if out is None:
+        out = pattern.zeros(ft, fs)
+    used = (coeff != 0).any(axis=0)                        # (ft, 3, fs, 3)
+    f, g, j = np.nonzero(used.any(axis=1))                 # the terms (f, g, j) in use
+    by_j = np.argsort(j, kind="stable")
+    f, g, j = f[by_j], g[by_j], j[by_j]
     phi = test.phi
     order = sp.csr_matrix((np.arange(phi.nnz, dtype=np.int64), phi.indices, phi.indptr),
                           shape=phi.shape).tocsc()  # test entries grouped by node
-    used = coeff != 0  # slots (phi, d/dx, d/dy) that the integrand touches
-    slots_a = np.flatnonzero(used.any(axis=(0, 1, 3, 4)))
-    slots_b = np.flatnonzero(used.any(axis=(0, 1, 2, 3)))
-    _scatter(pattern.indptr, pattern.indices, order.indptr.astype(np.int64),
-             order.indices.astype(np.int64), order.data.astype(np.int64), components(test),
-             trial.phi.indptr.astype(np.int64), trial.phi.indices.astype(np.int64),
-             components(trial), np.ascontiguousarray(coeff), slots_a, slots_b, out)
+    _scatter(pattern.indptr, pattern.indices, order.indptr, order.indices, order.data,
+             components(test), trial.phi.indptr, trial.phi.indices, components(trial),
+             np.ascontiguousarray(coeff), f, g,
+             np.searchsorted(j, np.arange(4)), np.ascontiguousarray(used[f, :, g, j]), out)
     return out
 
 
 @numba.njit(cache=True)
 def _scatter(p_ptr, p_idx, a_colptr, a_points, a_entry, a_val, b_ptr, b_idx, b_val, coeff,
-             slots_a, slots_b, out):
-    """Row by row of the pattern: a column map replaces any search."""
-    ft, fs = coeff.shape[1], coeff.shape[3]
-    position = np.empty(p_idx.max() + 1 if len(p_idx) else 0, dtype=np.int64)
-    t = np.empty((ft, fs, 3))
+             tf, tg, j_start, t_slots, out):
+    """Row by row of the pattern (the test node): a column map replaces any search. The
+    test side is contracted once per (node, point) into the terms in use, sorted by trial
+    slot j (``j_start``); every trial node of the point then adds ``t * S_b[j]`` to a
+    contiguous row buffer (trial node, term), which is added to ``out`` once per row."""
+    fs, nnz, terms = coeff.shape[3], len(p_idx), len(tf)
+    position = np.empty(p_idx.max() + 1 if nnz else 0, dtype=np.int64)
+    widest = np.max(p_ptr[1:] - p_ptr[:-1]) if nnz else 0
+    row_sum = np.zeros(widest * terms)
+    t = np.empty(terms)
+    tj = np.empty(terms, dtype=np.int64)
+    for jj in range(3):
+        tj[j_start[jj]:j_start[jj + 1]] = jj
     for row in range(len(p_ptr) - 1):
-        for k in range(p_ptr[row], p_ptr[row + 1]):
-            position[p_idx[k]] = k
+        start, length = p_ptr[row], p_ptr[row + 1] - p_ptr[row]
+        for k in range(start, p_ptr[row + 1]):
+            position[p_idx[k]] = k - start
         for c in range(a_colptr[row], a_colptr[row + 1]):
             q, ka = a_points[c], a_entry[c]
-            for f in range(ft):  # t = S_a . coeff[q]: the test side contracted once
-                for g in range(fs):
-                    for j in slots_b:
-                        s = 0.0
-                        for i in slots_a:
-                            s += a_val[i, ka] * coeff[q, f, i, g, j]
-                        t[f, g, j] = s
+            for m in range(terms):
+                s = 0.0
+                for i in range(3):
+                    if t_slots[m, i]:
+                        s += a_val[i][ka] * coeff[q, tf[m], i, tg[m], tj[m]]
+                t[m] = s
             for kb in range(b_ptr[q], b_ptr[q + 1]):
-                pos = position[b_idx[kb]]
-                for f in range(ft):
-                    for g in range(fs):
-                        s = 0.0
-                        for j in slots_b:
-                            s += t[f, g, j] * b_val[j, kb]
-                        out[f, g, pos] += s
-
-
-def to_matrix(pattern, values):
-    """Global CSR matrix of a block, fields blocked: rows ``f * n_test + a``.
-
-    Built directly in CSR (no COO of blocks): row ``(f, a)`` holds the pattern row ``a``
-    once per trial field ``g``, at columns ``g * n_trial + b``.
-
-    Parameters
-    ----------
-    pattern : Pattern
-    values : ndarray, shape (ft, fs, nnz)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> pattern = Pattern(np.array([0, 2, 3]), np.array([0, 1, 1]), (2, 2))
-    >>> to_matrix(pattern, np.arange(6.0).reshape(1, 2, 3)).toarray()
-    array([[0., 1., 3., 4.],
-           [0., 2., 0., 5.]])
-    """
-    ft, fs, nnz = values.shape
-    (n_rows, n_cols), ptr = pattern.shape, pattern.indptr
-    lengths = np.diff(ptr)
-    row_ptr = np.concatenate([[0], np.cumsum(lengths * fs)])          # one test field
-    row = np.repeat(np.arange(n_rows), lengths * fs)
-    within = np.arange(fs * nnz) - row_ptr[row]
-    g, j = within // lengths[row], within % lengths[row]
-    gather = g * nnz + ptr[row] + j                                   # into values[f]
-    columns = g * n_cols + pattern.indices[ptr[row] + j]
-    indptr = np.concatenate([row_ptr[:-1] + f * fs * nnz for f in range(ft)]
-                            + [[ft * fs * nnz]])
-    return sp.csr_matrix((values.reshape(ft, fs * nnz)[:, gather].ravel(),
-                          np.tile(columns, ft), indptr),
-                         shape=(ft * n_rows, fs * n_cols))
+                at = position[b_idx[kb]] * terms
+                for jj in range(3):
+                    value = b_val[jj][kb]
+                    for m in range(j_start[jj], j_start[jj + 1]):
+                        row_sum[at + m] += t[m] * value
+        for m in range(terms):
+            base = tf[m] * fs * nnz + fs * start + tg[m] * length
+            for k in range(length):
+                out[base + k] += row_sum[k * terms + m]
+                row_sum[k * terms + m] = 0.0
 
 
 def elasticity_coefficients(weights, tangent):

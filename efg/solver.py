@@ -51,7 +51,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from efg import vci
-from efg.assembly import Pattern, scatter, to_matrix
+from efg.assembly import Pattern, scatter
 from efg.boundary import (boundary_points, conditions, penalty_coefficients,
                           segment_edges)
 from efg.mls import ShapeFunctions
@@ -331,30 +331,32 @@ class _Discretisation:
         return self.tu is self.tp and self.su is self.sp and self.sub is self.spb
 
     @property
-    def pairs(self):
-        """Block name: (test, trial) shape functions."""
+    def blocks(self):
+        """Block name: its (test, trial) shape functions, domain then boundary points."""
         if self.shared:
-            return {"domain": (self.tu, self.su), "boundary": (self.sub, self.sub)}
-        return {"uu": (self.tu, self.su), "up": (self.tu, self.sp), "pu": (self.tp, self.su),
-                "pp": (self.tp, self.sp), "bu": (self.sub, self.sub),
-                "bp": (self.spb, self.spb)}
+            return {"domain": ((self.tu, self.su), (self.sub, self.sub))}
+        return {"uu": ((self.tu, self.su), (self.sub, self.sub)), "up": ((self.tu, self.sp),),
+                "pu": ((self.tp, self.su),), "pp": ((self.tp, self.sp), (self.spb, self.spb))}
 
-    def block(self, name, coeff):
-        test, trial = self.pairs[name]
-        return to_matrix(self.patterns[name], scatter(self.patterns[name], test, trial, coeff))
+    def block(self, name, coeff, boundary):
+        """One block's matrix from its domain (and boundary) coefficients."""
+        pattern, pairs = self.patterns[name], self.blocks[name]
+        values = None
+        for (test, trial), c in zip(pairs, (coeff, boundary)):
+            values = scatter(pattern, test, trial, c, values)
+        return pattern.matrix(values, coeff.shape[1], coeff.shape[3])
 
     def tangent(self, coeff, boundary):
         """Tangent of ``(ux, uy, p_w)``, fields blocked, from the integrand coefficients at
         the integration points (M, 3, 3, 3, 3) and the boundary points (G, 3, 3, 3, 3)."""
         if self.shared:
-            return self.block("domain", coeff) + self.block("boundary", boundary)
+            return self.block("domain", coeff, boundary)
         u, p = slice(0, 2), slice(2, 3)
         return sp.bmat([
-            [self.block("uu", coeff[:, u, :, u]) + self.block("bu", boundary[:, u, :, u]),
-             self.block("up", coeff[:, u, :, p])],
-            [self.block("pu", coeff[:, p, :, u]),
-             self.block("pp", coeff[:, p, :, p]) + self.block("bp", boundary[:, p, :, p])]],
-            format="csr")
+            [self.block("uu", coeff[:, u, :, u], boundary[:, u, :, u]),
+             self.block("up", coeff[:, u, :, p], None)],
+            [self.block("pu", coeff[:, p, :, u], None),
+             self.block("pp", coeff[:, p, :, p], boundary[:, p, :, p])]], format="csr")
 
 
 @dataclass
@@ -391,7 +393,7 @@ def _discretise(model, nodes, evaluation, timings):
                            conditions(case, bp), at_points, {})
     tic = time.perf_counter()
     timings["shape_functions_s"] += tic - toc
-    disc.patterns.update({name: Pattern.build(a, b) for name, (a, b) in disc.pairs.items()})
+    disc.patterns.update({name: Pattern.build(*pairs) for name, pairs in disc.blocks.items()})
     timings["assembly_s"] += time.perf_counter() - tic
     return disc
 
@@ -434,8 +436,10 @@ def _gradient(shape, du, n):
 def _reference(A, Finv_a, Finv_b):
     """Coefficients on current-configuration gradients -> on x_n gradients (slots 1, 2)."""
     M, fa, _, fb, _ = A.shape
+    right = A.reshape(M, 2 * fa * fb, 2) @ np.swapaxes(Finv_b, 1, 2)    # (m, f k g, j)
+    left = Finv_a[:, None] @ right.reshape(M, fa, 2, 2 * fb)              # (m, f, i, g j)
     out = np.zeros((M, fa, 3, fb, 3))
-    out[:, :, 1:, :, 1:] = np.einsum("mik,mfkgl,mjl->mfigj", Finv_a, A, Finv_b)
+    out[:, :, 1:, :, 1:] = left.reshape(M, fa, 2, fb, 2)
     return out
 
 

@@ -19,7 +19,7 @@ import pandas as pd
 import scipy.sparse.linalg as spla
 
 from efg import quadrature, vci
-from efg.assembly import Pattern, elasticity_coefficients, scatter, to_matrix
+from efg.assembly import Pattern, elasticity_coefficients, scatter
 from efg.boundary import (boundary_points, conditions, load_vector, penalty_coefficients,
                           segment_edges)
 from efg.mls import ShapeFunctions
@@ -64,17 +64,16 @@ def solve(case):
     test = shape
     if settings.correction == "vci":
         test = vci.corrected(shape, quad.weights, shape_b, bp.weights, bp.normal)
-    pattern = Pattern.build(test, shape)
-    K = to_matrix(pattern, scatter(pattern, test, shape,
-                                   elasticity_coefficients(quad.weights, material.stiffness)))
     constrained, u_bar, traction, loaded = boundary_data(case, bp, exact)
     alpha = penalty_factor(material, case, settings.penalty)
-    pattern_b = Pattern.build(shape_b, shape_b)
-    K_pen = to_matrix(pattern_b, scatter(pattern_b, shape_b, shape_b,
-                                         penalty_coefficients(bp, constrained, alpha)))
+    pattern = Pattern.build((test, shape), (shape_b, shape_b))
+    values = scatter(pattern, test, shape,
+                     elasticity_coefficients(quad.weights, material.stiffness))
+    K = pattern.matrix(scatter(pattern, shape_b, shape_b,
+                               penalty_coefficients(bp, constrained, alpha), values), 2, 2)
     rhs = (load_vector(shape_b.phi, bp, traction, loaded)
            + load_vector(shape_b.phi, bp, alpha * u_bar, constrained))
-    coefficients = spla.spsolve((K + K_pen).tocsc(), rhs)
+    coefficients = spla.spsolve(K.tocsc(), rhs)
     wall = time.perf_counter() - tic
 
     n = len(nodes)

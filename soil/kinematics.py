@@ -156,8 +156,8 @@ def spatial_tangent(C, effective, total):
         Indices (point, test field f, test derivative k, trial field g, trial derivative l).
     """
     d = np.eye(2)
-    B = GRADIENT_TO_VOIGT
-    T = np.einsum("fka,mab,glb->mfkgl", B, C, B)
+    B = GRADIENT_TO_VOIGT.reshape(4, 4)                     # (f k, Voigt)
+    T = (B @ C @ B.T).reshape(-1, 2, 2, 2, 2)
     T += 0.5 * (np.einsum("gf,mlk->mfkgl", d, effective)
                 - np.einsum("lf,mgk->mfkgl", d, effective)
                 - np.einsum("mfg,lk->mfkgl", effective, d)

@@ -5,7 +5,7 @@ import scipy.sparse as sp
 
 from comparisons.cli import main
 from comparisons.verification import cantilever_convergence, patch_test
-from efg.assembly import Pattern, elasticity_coefficients, scatter, to_matrix
+from efg.assembly import Pattern, elasticity_coefficients, scatter
 from efg.mls import ShapeFunctions
 from soil.analytical import plane_strain_stiffness
 
@@ -19,8 +19,8 @@ def test_scatter_equals_sparse_products():
     w = rng.uniform(0.5, 1.5, 200)
     sf = ShapeFunctions.build(nodes, points)
     C = plane_strain_stiffness(2.0, 0.3)
-    pattern = Pattern.build(sf, sf)
-    K = to_matrix(pattern, scatter(pattern, sf, sf, elasticity_coefficients(w, C)))
+    pattern = Pattern.build((sf, sf))
+    K = pattern.matrix(scatter(pattern, sf, sf, elasticity_coefficients(w, C)), 2, 2)
     dx, dy = sp.csr_matrix(sf.dphi_dx), sp.csr_matrix(sf.dphi_dy)
     zero = sp.csr_matrix(dx.shape)
     B = sp.bmat([[dx, zero], [zero, dy], [zero, zero], [dy, dx]])  # Voigt rows, blocked dofs
