@@ -256,15 +256,16 @@ def _bins(nodes, origin, size, shape):
 @numba.njit(cache=True)
 def _search(points, nodes, support, origin, size, shape, start, order):
     """Both passes of the cell-list search: row counts, then sorted column indices."""
+    binned = np.empty((len(order), 3))            # x, y, radius^2, contiguous per bin
+    binned[:, :2], binned[:, 2] = nodes[order], support[order] ** 2
     indptr = np.zeros(len(points) + 1, np.int64)
     indices = np.empty(0, np.int64)
     for p in range(len(points)):
-        indptr[p + 1] = indptr[p] + _scan(points[p], nodes, support, origin, size, shape,
-                                          start, order, indices, -1)
+        indptr[p + 1] = indptr[p] + _scan(points[p], binned, origin, size, shape, start,
+                                          order, indices, -1)
     indices = np.empty(indptr[-1], np.int64)
     for p in range(len(points)):
-        _scan(points[p], nodes, support, origin, size, shape, start, order, indices,
-              indptr[p])
+        _scan(points[p], binned, origin, size, shape, start, order, indices, indptr[p])
         for k in range(indptr[p] + 1, indptr[p + 1]):    # insertion sort of a short row
             node, m = indices[k], k
             while m > indptr[p] and indices[m - 1] > node:
@@ -275,7 +276,7 @@ def _search(points, nodes, support, origin, size, shape, start, order):
 
 
 @numba.njit(cache=True)
-def _scan(point, nodes, support, origin, size, shape, start, order, out, k):
+def _scan(point, binned, origin, size, shape, start, order, out, k):
     """Nodes seen by one point: counted, and written from ``out[k]`` on when ``k >= 0``."""
     x, y = point[0], point[1]
     bi, bj = _bin_of(x, y, origin, size, shape)
@@ -284,11 +285,10 @@ def _scan(point, nodes, support, origin, size, shape, start, order, out, k):
         for j in range(max(bj - 1, 0), min(bj + 2, shape[1])):
             b = i * shape[1] + j
             for m in range(start[b], start[b + 1]):
-                n = order[m]
-                dx, dy = x - nodes[n, 0], y - nodes[n, 1]
-                if dx * dx + dy * dy < support[n] ** 2:
+                dx, dy = x - binned[m, 0], y - binned[m, 1]
+                if dx * dx + dy * dy < binned[m, 2]:
                     if k >= 0:
-                        out[k + count] = n
+                        out[k + count] = order[m]
                     count += 1
     return count
 
