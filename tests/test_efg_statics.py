@@ -28,6 +28,29 @@ def test_scatter_equals_sparse_products():
     assert np.abs(K.toarray() - reference).max() < 1e-12 * np.abs(reference).max()
 
 
+def test_scatter_of_two_point_sets_with_sparse_terms():
+    """Three fields, coefficients that use only some (field, slot) terms, and a second
+    point set added into the same values: equal to the dense sum of S_i^T c S_j."""
+    rng = np.random.default_rng(5)
+    x = np.linspace(0, 1, 6)
+    nodes = np.stack(np.meshgrid(x, x), -1).reshape(-1, 2)
+    sets = [ShapeFunctions.build(nodes, rng.uniform(0, 1, (m, 2))) for m in (150, 40)]
+    coeffs = [rng.standard_normal((s.phi.shape[0], 3, 3, 3, 3)) for s in sets]
+    coeffs[0][:, :2, 0] = coeffs[0][:, :, :, :2, 0] = coeffs[0][:, 2, 1:, 2] = 0.0
+    coeffs[1][:, :, 1:] = coeffs[1][:, :, :, :, 1:] = 0.0     # values only (a penalty)
+    pattern = Pattern.build(*((s, s) for s in sets))
+    values = None
+    for s, c in zip(sets, coeffs):
+        values = scatter(pattern, s, s, c, values)
+    K = pattern.matrix(values, 3, 3).toarray()
+    n = len(nodes)
+    reference = np.zeros((3 * n, 3 * n))
+    for s, c in zip(sets, coeffs):
+        S = np.stack([s.phi.toarray(), s.dphi_dx.toarray(), s.dphi_dy.toarray()])
+        reference += np.einsum("iqa,qfigj,jqb->fagb", S, c, S).reshape(3 * n, 3 * n)
+    assert np.abs(K - reference).max() < 1e-12 * np.abs(reference).max()
+
+
 def test_patch_test_passes_with_the_default_settings():
     """Delaunay cells at the default Gauss order: errors below 1e-3 (vci, the default)."""
     table = patch_test()
