@@ -188,9 +188,12 @@ def support_radii(nodes, scale):
 def neighbours(nodes, points, support):
     """CSR pattern of the nodes each point sees: ``|x_p - x_J| < d_mJ``.
 
-    A cell list: the nodes are binned into squares of side ``R = max d_mJ``, so a point
-    tests only the nodes of its own and the 8 surrounding squares (two passes, count and
-    fill, then each row is sorted).
+    A cell list over supports: the plane is cut into square bins (side the median radius,
+    at most about 4 bins per node), each node is listed in every bin its support's bounding
+    square overlaps (in node order, so lists are sorted), and a point tests only the nodes
+    listed in its own bin: about 30 candidates for 10 hits, no sort. Binning by nodes
+    instead (bins of the largest radius, the 9 around the point) tested 120: the corner
+    nodes' radii are twice the interior's.
 
     Parameters
     ----------
@@ -217,11 +220,12 @@ def neighbours(nodes, points, support):
     >>> indptr.tolist(), indices.tolist()
     ([0, 2, 3], [0, 1, 2])
     """
-    size = max(float(support.max()), 1e-300)
     origin = nodes.min(axis=0)
-    shape = np.maximum(np.ceil((nodes.max(axis=0) - origin) / size), 1).astype(np.int64)
-    start, order = _bins(nodes, origin, size, shape)
-    indptr, indices = _search(points, nodes, support, origin, size, shape, start, order)
+    extent = np.maximum(nodes.max(axis=0) - origin, 1e-300)
+    size = max(float(np.median(support)), np.sqrt(extent.prod() / (4 * len(nodes))))
+    shape = np.maximum(np.ceil(extent / size), 1).astype(np.int64)
+    start, binned, order = _bins(nodes, support, origin, size, shape)
+    indptr, indices = _search(points, origin, size, shape, start, binned, order)
     small = max(indices.size, len(nodes), len(points)) < np.iinfo(np.int32).max
     kind = np.int32 if small else np.int64
     return indptr.astype(kind), indices.astype(kind)
@@ -236,61 +240,55 @@ def _bin_of(x, y, origin, size, shape):
 
 
 @numba.njit(cache=True)
-def _bins(nodes, origin, size, shape):
-    """Counting sort of the nodes by bin: bin b holds ``order[start[b]:start[b + 1]]``."""
-    key = np.empty(len(nodes), np.int64)
+def _bins(nodes, support, origin, size, shape):
+    """Bin lists of the nodes whose support square overlaps each bin, in node order:
+    bin b lists ``order[start[b]:start[b + 1]]``, with their (x, y, radius^2) in
+    ``binned`` (contiguous per bin). Two passes: count, then fill."""
     start = np.zeros(shape[0] * shape[1] + 1, np.int64)
-    for n in range(len(nodes)):
-        i, j = _bin_of(nodes[n, 0], nodes[n, 1], origin, size, shape)
-        key[n] = i * shape[1] + j
-        start[key[n] + 1] += 1
-    start = np.cumsum(start)
-    fill = start[:-1].copy()
-    order = np.empty(len(nodes), np.int64)
-    for n in range(len(nodes)):
-        order[fill[key[n]]] = n
-        fill[key[n]] += 1
-    return start, order
+    for fill in range(2):
+        if fill:
+            start = np.cumsum(start)
+            at = start[:-1].copy()
+            order = np.empty(start[-1], np.int64)
+            binned = np.empty((start[-1], 3))
+        for n in range(len(nodes)):
+            x, y, r = nodes[n, 0], nodes[n, 1], support[n]
+            i0, j0 = _bin_of(x - r, y - r, origin, size, shape)
+            i1, j1 = _bin_of(x + r, y + r, origin, size, shape)
+            for i in range(i0, i1 + 1):
+                for j in range(j0, j1 + 1):
+                    b = i * shape[1] + j
+                    if fill:
+                        order[at[b]] = n
+                        binned[at[b], 0], binned[at[b], 1], binned[at[b], 2] = x, y, r * r
+                        at[b] += 1
+                    else:
+                        start[b + 1] += 1
+    return start, binned, order
 
 
 @numba.njit(cache=True)
-def _search(points, nodes, support, origin, size, shape, start, order):
-    """Both passes of the cell-list search: row counts, then sorted column indices."""
-    binned = np.empty((len(order), 3))            # x, y, radius^2, contiguous per bin
-    binned[:, :2], binned[:, 2] = nodes[order], support[order] ** 2
+def _search(points, origin, size, shape, start, binned, order):
+    """Both passes of the search (row counts, then columns): a point's own bin only."""
     indptr = np.zeros(len(points) + 1, np.int64)
-    indices = np.empty(0, np.int64)
-    for p in range(len(points)):
-        indptr[p + 1] = indptr[p] + _scan(points[p], binned, origin, size, shape, start,
-                                          order, indices, -1)
-    indices = np.empty(indptr[-1], np.int64)
-    for p in range(len(points)):
-        _scan(points[p], binned, origin, size, shape, start, order, indices, indptr[p])
-        for k in range(indptr[p] + 1, indptr[p + 1]):    # insertion sort of a short row
-            node, m = indices[k], k
-            while m > indptr[p] and indices[m - 1] > node:
-                indices[m] = indices[m - 1]
-                m -= 1
-            indices[m] = node
-    return indptr, indices
-
-
-@numba.njit(cache=True)
-def _scan(point, binned, origin, size, shape, start, order, out, k):
-    """Nodes seen by one point: counted, and written from ``out[k]`` on when ``k >= 0``."""
-    x, y = point[0], point[1]
-    bi, bj = _bin_of(x, y, origin, size, shape)
-    count = 0
-    for i in range(max(bi - 1, 0), min(bi + 2, shape[0])):
-        for j in range(max(bj - 1, 0), min(bj + 2, shape[1])):
-            b = i * shape[1] + j
+    for fill in range(2):
+        if fill:
+            indices = np.empty(indptr[-1], np.int64)
+        else:
+            indices = np.empty(0, np.int64)
+        for p in range(len(points)):
+            x, y = points[p, 0], points[p, 1]
+            i, j = _bin_of(x, y, origin, size, shape)
+            b, count = i * shape[1] + j, 0
             for m in range(start[b], start[b + 1]):
                 dx, dy = x - binned[m, 0], y - binned[m, 1]
                 if dx * dx + dy * dy < binned[m, 2]:
-                    if k >= 0:
-                        out[k + count] = order[m]
+                    if fill:
+                        indices[indptr[p] + count] = order[m]
                     count += 1
-    return count
+            if not fill:
+                indptr[p + 1] = indptr[p] + count
+    return indptr, indices
 
 
 @numba.njit(cache=True)

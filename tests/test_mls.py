@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from efg.mls import RCOND_MIN, ShapeFunctions, support_radii
+from efg.mls import RCOND_MIN, ShapeFunctions, neighbours, support_radii
 from efg.weights import get_weight
 from soil.errors import InputError
 from soil.problems import load_case
@@ -113,6 +113,21 @@ def test_pattern_is_shared_sorted_and_matches_supports():
     assert np.all(distance < sf.support[sf.indices])
     all_pairs = np.linalg.norm(points[:, None] - nodes[None], axis=2) < sf.support
     assert all_pairs.sum() == sf.phi.nnz
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(1, 80), st.floats(0.01, 3.0))
+def test_neighbour_search_equals_brute_force(seed, n, spread):
+    """Clustered nodes with radii over two decades, points also outside the nodes' box:
+    the cell list finds exactly the pairs ``|x_p - x_J| < d_J``, rows sorted."""
+    rng = np.random.default_rng(seed)
+    nodes = rng.normal(0, 1, (n, 2)) * rng.uniform(0.01, 1, (n, 1))
+    support = spread * 10 ** rng.uniform(-2, 0, n)
+    points = rng.uniform(-2, 2, (50, 2))
+    indptr, indices = neighbours(nodes, points, support)
+    inside = np.linalg.norm(points[:, None] - nodes[None], axis=2) < support
+    np.testing.assert_array_equal(indptr, np.concatenate([[0], np.cumsum(inside.sum(1))]))
+    np.testing.assert_array_equal(indices, np.nonzero(inside)[1])
 
 
 def test_exponential_b_is_nearly_interpolating():
