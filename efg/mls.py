@@ -314,13 +314,15 @@ def _shape_kernel(points, nodes, support, indptr, indices, kind, c, rcond_min):
         for k in range(start, stop):
             h += support[indices[k]]
         h /= stop - start
+        inv_h = 1.0 / h
         moments[:] = 0.0
         for k in range(start, stop):
             j = indices[k]
             phi[k], dx[k], dy[k] = _weight(x - nodes[j, 0], y - nodes[j, 1], support[j],
                                            kind, c)
-            _accumulate(moments, (nodes[j, 0] - x) / h, (nodes[j, 1] - y) / h,
+            _accumulate(moments, (nodes[j, 0] - x) * inv_h, (nodes[j, 1] - y) * inv_h,
                         phi[k], dx[k], dy[k])
+        _symmetrise(moments)
         rcond[p] = _inverse3(moments[0], inverse)
         if rcond[p] < rcond_min:
             phi[start:stop], dx[start:stop], dy[start:stop] = 0.0, 0.0, 0.0
@@ -330,7 +332,7 @@ def _shape_kernel(points, nodes, support, indptr, indices, kind, c, rcond_min):
         _gamma_derivative(inverse, moments[2], gamma, 2, h, rhs, gamma_y)
         for k in range(start, stop):
             j = indices[k]
-            bx, by = (nodes[j, 0] - x) / h, (nodes[j, 1] - y) / h
+            bx, by = (nodes[j, 0] - x) * inv_h, (nodes[j, 1] - y) * inv_h
             base = gamma[0] + bx * gamma[1] + by * gamma[2]
             dx[k] = phi[k] * (gamma_x[0] + bx * gamma_x[1] + by * gamma_x[2]) + dx[k] * base
             dy[k] = phi[k] * (gamma_y[0] + bx * gamma_y[1] + by * gamma_y[2]) + dy[k] * base
@@ -351,11 +353,20 @@ def _weight(ex, ey, support, kind, c):
 def _accumulate(moments, bx, by, w, wx, wy):
     """Add ``(w, w_,x, w_,y) b b^T`` of one node, ``b = [1, bx, by]``, to the moments."""
     b = (1.0, bx, by)
-    for a in range(3):
-        for e in range(3):
-            moments[0, a, e] += w * b[a] * b[e]
-            moments[1, a, e] += wx * b[a] * b[e]
-            moments[2, a, e] += wy * b[a] * b[e]
+    for a in range(3):          # upper triangle; :func:`_symmetrise` fills the rest
+        for e in range(a, 3):
+            bb = b[a] * b[e]
+            moments[0, a, e] += w * bb
+            moments[1, a, e] += wx * bb
+            moments[2, a, e] += wy * bb
+
+
+@numba.njit(cache=True)
+def _symmetrise(moments):
+    """Lower triangles of the three moment matrices from their upper ones."""
+    for m in range(3):
+        moments[m, 1, 0], moments[m, 2, 0] = moments[m, 0, 1], moments[m, 0, 2]
+        moments[m, 2, 1] = moments[m, 1, 2]
 
 
 @numba.njit(cache=True)
