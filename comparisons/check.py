@@ -69,11 +69,15 @@ def consolidation_errors():
 
 
 #: name -> (function, rtol, atol); atol may be ``{column: atol, "*": default}``. ERR of a
-#: homogeneous run is the noise of the Newton tolerance (1e-6 to 1e-5, different for
-#: SuperLU and PARDISO); homogeneity is lost at ERR > 0.1, so ERR is compared to 1e-4.
+#: homogeneous run is the noise of the Newton tolerance, amplified near the critical state
+#: (12 to 14 % strain) where the tangent is nearly singular: the EFG squares run gives
+#: 1.5e-6 with PARDISO and, on the same code, up to 2.7e-4 with SuperLU, whose order now
+#: sees the explicit zeros kept in the tangent (1.3e-5 before; with the zeros eliminated
+#: SuperLU stops at 16.8 % strain on an exactly singular factor). Homogeneity is lost at
+#: ERR > 0.1, so ERR is compared to 1e-3.
 TABLES = {
     "driver_paths": (driver_paths, 1e-6, 1e-9),
-    "unconfined_err": (unconfined_err, 1e-4, {"err": 1e-4, "*": 1e-7}),
+    "unconfined_err": (unconfined_err, 1e-4, {"err": 1e-3, "*": 1e-7}),
     "column_stability": (column_stability, 1e-4, 1e-6),
     "consolidation_errors": (consolidation_errors, 1e-4, 1e-6),
 }
