@@ -46,6 +46,7 @@ the domain is then pinned to zero by one Lagrange multiplier.
 
 import time
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -267,7 +268,7 @@ def _roundoff(disc, points, du, du_bar, p, plate, alpha_u, alpha_p, rigid_w):
     stalls at about half of it whatever the tangent.
     """
     eps, bc = np.finfo(float).eps, disc.bc
-    phi_u, phi_p = abs(disc.sub.phi), abs(disc.spb.phi)
+    phi_u, phi_p = disc.boundary_magnitudes
     size = np.abs(points.gap) + phi_u @ np.abs(du) + np.abs(du_bar)                # (G, 2)
     plate_size = (np.abs(points.plate_gap) + phi_u @ np.abs(du[:, 1])
                   + abs(plate - points.plate)) * np.abs(rigid_w)
@@ -329,6 +330,11 @@ class _Discretisation:
     def shared(self):
         """True when u and p_w use the same shape functions: one three-field pattern."""
         return self.tu is self.tp and self.su is self.sp and self.sub is self.spb
+
+    @cached_property
+    def boundary_magnitudes(self):
+        """``|phi|`` of u and p_w at the boundary points, for :func:`_roundoff`."""
+        return abs(self.sub.phi), abs(self.spb.phi)
 
     @property
     def blocks(self):
