@@ -1,30 +1,111 @@
 """The ``soilwater`` command: ``list``, ``show``, ``run``, ``path``, ``report``, ``check``,
 ``bench``.
 
-Errors the user can fix (bad input, a run that cannot converge) print one line,
-``soilwater: error: ...``, and exit with status 2; nothing is written.
+Nothing fails with a traceback. Exit status:
+
+* 2: an error the user can fix (bad input, a run that cannot converge, a refused
+  ``--out``) or an operating-system error (disk full, permission, read-only file system);
+  one line ``soilwater: error: ...`` on stderr; nothing is written.
+* 130 (SIGINT, Ctrl-C) or 143 (SIGTERM): one line ``soilwater: interrupted (...)``;
+  temporary files are removed, no half-written output is left.
+* 141: standard output closed early (``soilwater show CASE | head -1``); silent, like a
+  command killed by SIGPIPE.
 """
 
 import argparse
+import multiprocessing
+import os
+import signal
 import sys
+from contextlib import contextmanager
 
 from soil.errors import SoilwaterError
 
+#: Exit status when standard output is closed early: 128 + SIGPIPE, as the shell reports.
+BROKEN_PIPE = 141
+
+
+class Interrupted(KeyboardInterrupt):
+    """SIGINT or SIGTERM arrived; raised by the handler of :func:`interruptible` so the
+    cleanup of every ``except BaseException`` on the way runs."""
+
+    def __init__(self, signum):
+        super().__init__(signum)
+        self.signum = signum
+
 
 def main(argv=None):
-    """Entry point of the console script; returns the exit status."""
-    parser = _parser()
-    args = parser.parse_args(argv)
+    """Entry point of the console script; returns the exit status (see the module)."""
+    with interruptible():
+        try:
+            args = _parser().parse_args(argv)
+            status = args.func(args) or 0
+            sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
+            return status
+        except SoilwaterError as err:
+            return _fail(f"error: {err}", 2)
+        except KeyboardInterrupt as err:
+            signum = getattr(err, "signum", signal.SIGINT)
+            return _fail(f"interrupted ({signal.Signals(signum).name}): no half-written "
+                         "output was left", 128 + signum)
+        except BrokenPipeError:
+            # the Python documentation's recipe: no second error at interpreter exit
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return BROKEN_PIPE
+        except OSError as err:
+            return _fail(f"error: {os_message(err)}", 2)
+
+
+def _fail(message, status):
+    print(f"soilwater: {message}", file=sys.stderr)
+    return status
+
+
+def os_message(err):
+    """One line for an operating-system error: the path(s) it names, then the reason.
+
+    >>> os_message(OSError(28, "No space left on device", "runs/a/fields_0000.vtu"))
+    'runs/a/fields_0000.vtu: No space left on device'
+    """
+    paths = [str(name) for name in (err.filename, err.filename2) if name is not None]
+    reason = err.strerror or str(err)
+    return f"{' -> '.join(paths)}: {reason}" if paths else reason
+
+
+@contextmanager
+def interruptible():
+    """While the block runs, SIGINT and SIGTERM raise :class:`Interrupted` in this process.
+
+    The handler first terminates this process's multiprocessing children (the workers of
+    a sweep), so that waiting for them does not outlast the signal. A worker forked inside
+    the block inherits the handler; there it restores the default action and re-sends the
+    signal, so the worker ends quietly, without a traceback. A signal ignored on entry
+    (SIGINT of a background job) stays ignored; the previous handlers are restored on exit.
+    """
+    pid = os.getpid()
+
+    def handler(signum, frame):
+        if os.getpid() != pid:
+            signal.signal(signum, signal.SIG_DFL)
+            os.kill(os.getpid(), signum)
+        else:
+            for child in multiprocessing.active_children():
+                child.terminate()
+            raise Interrupted(signum)
+
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)
+                if signal.getsignal(s) is not signal.SIG_IGN}
     try:
-        return args.func(args) or 0
-    except SoilwaterError as err:
-        print(f"soilwater: error: {err}", file=sys.stderr)
-        return 2
+        yield
+    finally:
+        for signum, action in previous.items():
+            signal.signal(signum, action)
 
 
 def _parser():
     from comparisons.runner import METHODS
     from soil.driver import TESTS
+    from soil.results import MARKER
 
     parser = argparse.ArgumentParser(
         prog="soilwater",
@@ -43,10 +124,12 @@ def _parser():
     p = sub.add_parser("run", help="run a case with a method and write its result folder",
                        description="Solve a case (built-in name or TOML file) and write "
                        "DIR/summary.json, DIR/history.csv and DIR/fields.pvd with VTU files. "
-                       "DIR is replaced only when the run succeeds.")
+                       "DIR must be new, empty or a previous result (it holds "
+                       f"{MARKER}); it is replaced only when the run succeeds.")
     _case_arguments(p)
     p.add_argument("--method", required=True, choices=list(METHODS), help="solver")
-    p.add_argument("--out", required=True, metavar="DIR", help="result folder")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="result folder: new, empty or a previous result")
     p.set_defaults(func=_run)
 
     p = sub.add_parser("path", help="stress-point driver: a material under a named test",
@@ -115,7 +198,9 @@ def _show(args):
 def _run(args):
     from comparisons.runner import METHODS
     from soil.problems import load_case
+    from soil.results import check_output_folder
 
+    check_output_folder(args.out)  # before any work: a bad --out fails at once
     case = load_case(args.case, args.set)
     result = METHODS[args.method](case)
     result.write(args.out)

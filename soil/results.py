@@ -2,6 +2,9 @@
 
 A failed run must leave no half-written output and never write NaN, so every writer
 goes through a temporary file in the target folder and an atomic rename.
+
+Nothing deletes a file or folder that soilwater did not write: a result folder holds the
+marker file :data:`MARKER`, and :func:`check_output_folder` refuses any other target.
 """
 
 import json
@@ -9,13 +12,66 @@ import os
 import shutil
 import tempfile
 from dataclasses import dataclass, field
+from importlib.metadata import version
 from pathlib import Path
 
 import meshio
 import numpy as np
 import pandas as pd
 
-from soil.errors import SoilwaterError
+from soil.errors import InputError, SoilwaterError
+
+#: File in every result folder :meth:`Result.write` writes; only a folder holding it (or an
+#: empty one) is ever replaced.
+MARKER = ".soilwater-output"
+
+_FIX = "name a new or empty folder, e.g. --out runs/NAME"
+
+
+def check_output_folder(path):
+    """Resolve a result folder, refusing one that soilwater must not write or replace.
+
+    ``~`` is expanded and symbolic links, ``.`` and ``..`` are resolved first. A folder
+    that does not exist yet, an empty folder and a folder holding :data:`MARKER` (a
+    previous result) are accepted.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    Path
+        The resolved folder.
+
+    Raises
+    ------
+    InputError
+        If the folder is the current folder or holds it, is the home folder or holds it,
+        is a file, or is a non-empty folder without :data:`MARKER`.
+
+    Examples
+    --------
+    >>> check_output_folder(".")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    soil.errors.InputError: --out . (= ...): the current folder or a folder holding it ...
+    """
+    folder = Path(path).expanduser().resolve()
+    shown = str(path) if str(path) == str(folder) else f"{path} (= {folder})"
+    cwd, home = Path.cwd().resolve(), Path.home().resolve()
+    if folder == cwd or folder in cwd.parents:
+        raise InputError(f"--out {shown}: the current folder or a folder holding it "
+                         f"cannot be a result folder, which is replaced whole; {_FIX}")
+    if folder == home or folder in home.parents:
+        raise InputError(f"--out {shown}: the home folder or a folder holding it cannot "
+                         f"be a result folder, which is replaced whole; {_FIX}")
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"--out {shown} is a file, not a folder; {_FIX}")
+    if folder.is_dir() and not (folder / MARKER).is_file() and any(folder.iterdir()):
+        raise InputError(f"--out {shown} holds files soilwater did not write (no {MARKER} "
+                         f"file); {_FIX}, or empty it yourself")
+    return folder
 
 
 def write_csv(frame, path):
@@ -28,9 +84,14 @@ def write_csv(frame, path):
 
     Raises
     ------
+    InputError
+        If ``path`` is an existing folder (nothing is written).
     SoilwaterError
         If a numeric column holds NaN or infinity (nothing is written).
     """
+    if Path(path).is_dir():
+        raise InputError(f"--out {path} is a folder: name a CSV file, e.g. "
+                         f"{Path(path) / 'path.csv'}")
     numbers = frame.select_dtypes("number").to_numpy(dtype=float)
     if not np.isfinite(numbers).all():
         raise SoilwaterError(f"refusing to write {path}: the table holds NaN or infinity")
@@ -84,27 +145,44 @@ class Result:
     summary: dict
 
     def write(self, folder):
-        """Write ``summary.json``, ``history.csv``, ``fields.pvd`` and VTU files.
+        """Write ``summary.json``, ``history.csv``, ``fields.pvd``, VTU files and
+        :data:`MARKER` to ``folder``.
 
-        Everything goes to a temporary sibling folder that replaces ``folder`` only when
-        complete, so a failure leaves ``folder`` as it was.
+        ``folder`` must pass :func:`check_output_folder`. Everything goes to a hidden
+        temporary sibling folder; only when it is complete does it take the place of
+        ``folder`` (a previous result is renamed aside, the new one renamed in, the old one
+        removed). On any failure, including KeyboardInterrupt, the temporary folder is
+        removed and ``folder`` is left as it was.
+
+        Returns
+        -------
+        Path
+            The resolved folder written.
         """
-        folder = Path(folder)
+        folder = check_output_folder(folder)
         folder.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(dir=folder.parent, prefix=f".{folder.name}."))
+        tmp = Path(tempfile.mkdtemp(dir=folder.parent, prefix=f".{folder.name}.",
+                                    suffix=".tmp"))
+        old = tmp.with_suffix(".old")
         try:
-            write_csv(self.history, tmp / "history.csv")
-            summary = {"case": self.case.to_dict(), "method": self.method,
-                       "options": self.options, "versions": versions(), **self.summary}
-            (tmp / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
-            self._write_fields(tmp)
-            if folder.exists():
-                shutil.rmtree(folder)
-            os.replace(tmp, folder)
+            self._write_files(tmp)
+            check_output_folder(folder)  # again: the folder may have changed during the run
+            _swap(tmp, folder, old)
         except BaseException:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
+        shutil.rmtree(old, ignore_errors=True)
         return folder
+
+    def _write_files(self, folder):
+        marker = {"written_by": "soilwater", "version": version("soilwater"),
+                  "note": "soilwater run replaces this folder whole"}
+        (folder / MARKER).write_text(json.dumps(marker) + "\n")
+        write_csv(self.history, folder / "history.csv")
+        summary = {"case": self.case.to_dict(), "method": self.method,
+                   "options": self.options, "versions": versions(), **self.summary}
+        (folder / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
+        self._write_fields(folder)
 
     def _write_fields(self, folder):
         entries = []
@@ -117,16 +195,29 @@ class Result:
             name = f"fields_{k:04d}.vtu"
             points3 = np.column_stack([snap.points, np.zeros(len(snap.points))])
             meshio.write(folder / name, meshio.Mesh(points3, cells, point_data=snap.point_data))
-            entries.append(f'    <DataSet timestep="{snap.time!r}" file="{name}"/>')
+            entries.append(f'    <DataSet timestep="{float(snap.time)!r}" file="{name}"/>')
         (folder / "fields.pvd").write_text(
             '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
             "  <Collection>\n" + "\n".join(entries) + "\n  </Collection>\n</VTKFile>\n")
 
 
+def _swap(new, folder, old):
+    """Put folder ``new`` in the place of ``folder``; a previous ``folder`` goes to ``old``.
+
+    If renaming ``new`` in fails, the previous ``folder`` is renamed back.
+    """
+    if folder.exists():
+        os.rename(folder, old)
+    try:
+        os.rename(new, folder)
+    except BaseException:
+        if old.exists():
+            os.rename(old, folder)
+        raise
+
+
 def versions():
     """Versions of soilwater and the libraries a result depends on."""
-    from importlib.metadata import version
-
     import scipy
     import skfem
 

@@ -1,13 +1,17 @@
-"""The ``soilwater`` command: output files, one-line errors, nothing written on failure."""
+"""The ``soilwater`` command: output files, one-line errors, nothing written on failure,
+nothing deleted that soilwater did not write."""
 
+import errno
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
-from comparisons.cli import main
+from comparisons.cli import Interrupted, main
 
 
 def test_path_writes_the_documented_columns(tmp_path):
@@ -79,3 +83,162 @@ def test_bad_case_input_is_one_line(tmp_path, args, word):
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and word in lines[0], proc.stderr
+
+
+def _cli(args, cwd, **kwargs):
+    """Run ``soilwater ARGS`` in a real process."""
+    return subprocess.run([sys.executable, "-m", "comparisons.cli", *args], cwd=cwd,
+                          capture_output=True, text=True, **kwargs)
+
+
+def _contents(folder):
+    """Every file and folder under ``folder`` (hidden ones too), with file contents."""
+    return {p.relative_to(folder): p.read_bytes() if p.is_file() else None
+            for p in sorted(Path(folder).rglob("*"))}
+
+
+def test_run_into_the_current_folder_is_refused_and_touches_nothing(tmp_path):
+    (tmp_path / "notes.txt").write_text("my notes")
+    proc = _cli(["run", "unconfined-compression", "--method", "efg", "--out", "."],
+                tmp_path)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("soilwater: error:")
+    assert str(tmp_path.resolve()) in lines[0] and "Traceback" not in proc.stderr
+    assert _contents(tmp_path) == {Path("notes.txt"): b"my notes"}
+
+
+@pytest.fixture
+def refusing(tmp_path, monkeypatch):
+    """A home folder, a working folder holding notes.txt, a data folder and a link to
+    the working folder's parent; the solvers fail the test if they are ever called."""
+    from comparisons.runner import METHODS
+
+    home, work, data = tmp_path / "home", tmp_path / "a" / "work", tmp_path / "data"
+    for folder in (home, work, data):
+        folder.mkdir(parents=True)
+    (work / "notes.txt").write_text("my notes")
+    (data / "x.csv").write_text("time\n1.0\n")
+    (work / "up").symlink_to("..")
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.chdir(work)
+    for method in METHODS:
+        monkeypatch.setitem(METHODS, method, lambda *a, **k: pytest.fail("solver called"))
+    return tmp_path.resolve()
+
+
+@pytest.mark.parametrize("out,named,word", [
+    ("..", "a", "current folder"),
+    ("up", "a", "current folder"),
+    ("/", "/", "current folder"),
+    ("HOME", "home", "home folder"),
+    ("notes.txt", "a/work/notes.txt", "is a file"),
+    ("../../data", "data", "did not write"),
+])
+def test_run_refuses_folders_it_did_not_write_before_solving(refusing, capsys, out, named,
+                                                               word):
+    before = _contents(refusing)
+    out = str(refusing / "home") if out == "HOME" else out
+    assert main(["run", "patch-test", "--method", "efg", "--out", out]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("soilwater: error:") and word in lines[0]
+    assert str(refusing / named) in lines[0]  # "/" stays "/"
+    assert _contents(refusing) == before
+
+
+def test_a_second_run_replaces_the_first_result(tmp_path, monkeypatch):
+    from soil.results import MARKER
+
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "run"
+    out.mkdir()  # an empty folder is accepted
+    args = ["run", "patch-test", "--method", "efg", "--out", str(out)]
+    assert main(args) == 0 and (out / MARKER).is_file()
+    (out / "fields_0099.vtu").write_text("left by an older run")
+    assert main(args + ["--set", "discretisation.nx=5"]) == 0
+    assert (out / MARKER).is_file() and not (out / "fields_0099.vtu").exists()
+    assert '"nx": 5' in (out / "summary.json").read_text()
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]
+
+
+def _handles_sigterm(pid):
+    """Whether process ``pid`` has installed a SIGTERM handler (Linux /proc)."""
+    status = Path(f"/proc/{pid}/status").read_text()
+    caught = int(status.split("SigCgt:")[1].split()[0], 16)
+    return bool(caught >> (signal.SIGTERM - 1) & 1)
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="needs Linux /proc")
+def test_sigterm_during_a_run_is_one_line_and_leaves_nothing(tmp_path):
+    cmd = [sys.executable, "-m", "comparisons.cli", "run", "unconfined-compression",
+           "--method", "efg", "--out", "run", "--set", "time.steps=400"]  # ~30 s
+    proc = subprocess.Popen(cmd, cwd=tmp_path, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 30
+    while not _handles_sigterm(proc.pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(2.5)  # past the imports (about 1 s) and the case set-up: solving
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 143
+    assert err.strip().splitlines() == [
+        "soilwater: interrupted (SIGTERM): no half-written output was left"]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_stdout_closed_early_is_silent(tmp_path):
+    cmd = [sys.executable, "-m", "comparisons.cli", "show", "soil-column"]
+    proc = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    proc.stdout.close()  # before soilwater writes: every write meets a closed pipe
+    err = proc.stderr.read()
+    assert proc.wait(timeout=30) == 141 and err == ""
+
+
+@pytest.mark.parametrize("error,status,text", [
+    (OSError(errno.ENOSPC, "No space left on device", "fields_0000.vtu"), 2,
+     "soilwater: error: fields_0000.vtu: No space left on device"),
+    (PermissionError(errno.EACCES, "Permission denied"), 2,
+     "soilwater: error: Permission denied"),
+    (Interrupted(signal.SIGTERM), 143,
+     "soilwater: interrupted (SIGTERM): no half-written output was left"),
+])
+def test_a_failing_write_is_one_line_and_keeps_the_previous_result(
+        tmp_path, monkeypatch, capsys, error, status, text):
+    import meshio
+
+    monkeypatch.chdir(tmp_path)
+    args = ["run", "patch-test", "--method", "efg", "--out", "run"]
+    assert main(args) == 0
+    before = _contents(tmp_path)
+    capsys.readouterr()
+
+    def fail(*args, **kwargs):
+        raise error
+
+    monkeypatch.setattr(meshio, "write", fail)
+    assert main(args) == status
+    assert capsys.readouterr().err.strip().splitlines() == [text]
+    assert _contents(tmp_path) == before
+
+
+def test_a_failing_first_write_leaves_no_folder(tmp_path, monkeypatch, capsys):
+    import meshio
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", args[0])
+
+    monkeypatch.setattr(meshio, "write", full)
+    out = tmp_path / "run"
+    assert main(["run", "patch-test", "--method", "efg", "--out", str(out)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "No space left on device" in lines[0]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_path_refuses_a_folder_as_its_csv_file(tmp_path, capsys):
+    (tmp_path / "old.csv").write_text("kept")
+    assert main(["path", "table1", "--test", "oedometer", "--strain", "0.05",
+                 "--out", str(tmp_path)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and str(tmp_path) in lines[0] and "is a folder" in lines[0]
+    assert _contents(tmp_path) == {Path("old.csv"): b"kept"}
