@@ -20,8 +20,8 @@ distance"). A point sees node J if ``|x - x_J| < d_mJ``.
 
 Safeguard: every point must see at least 3 non-collinear nodes and its scaled moment
 matrix must have a reciprocal condition number (1-norm) of at least :data:`RCOND_MIN`;
-otherwise :meth:`ShapeFunctions.build` raises :class:`InputError` naming the worst point
-and the fix.
+otherwise :meth:`ShapeFunctions.build` raises :class:`InputError` naming the worst point,
+the case entry of the scale factor (``efg.scale_u`` or ``efg.scale_p``) and the fix.
 """
 
 from dataclasses import dataclass
@@ -92,7 +92,7 @@ class ShapeFunctions:
         return self.phi.indices
 
     @classmethod
-    def build(cls, nodes, points, weight="quartic", scale=1.3):
+    def build(cls, nodes, points, weight="quartic", scale=1.3, key="efg.scale_u"):
         """Shape functions and gradients of ``nodes`` at ``points``.
 
         Parameters
@@ -106,6 +106,9 @@ class ShapeFunctions:
             or ``exp:C`` (``E-A`` = ``exp:0.5``, ``E-B`` = ``exp:0.25``).
         scale : float
             Scale factor of the supports, ``d_mJ = scale x d_J`` (usually 1.2 to 1.5).
+        key : str
+            The case entry ``scale`` comes from (``efg.scale_u`` or ``efg.scale_p``),
+            named in the message when the supports are too small.
 
         Returns
         -------
@@ -138,7 +141,7 @@ class ShapeFunctions:
         indptr, indices = neighbours(nodes, points, support)
         phi, dx, dy, rcond = _shape_kernel(points, nodes, support, indptr, indices,
                                            weight.kind, weight.c, RCOND_MIN)
-        _require_regular(rcond, points, nodes, indptr, indices, weight, scale)
+        _require_regular(rcond, points, nodes, indptr, indices, weight, scale, key)
         shape = (len(points), len(nodes))
         phi, dx, dy = (csr_array((data, indices, indptr), shape=shape)
                        for data in (phi, dx, dy))
@@ -404,8 +407,8 @@ def _inverse3(a, inverse):
     return 1.0 / (norm_a * norm_inv)
 
 
-def _require_regular(rcond, points, nodes, indptr, indices, weight, scale):
-    """Raise InputError naming the worst point unless every rcond reaches RCOND_MIN."""
+def _require_regular(rcond, points, nodes, indptr, indices, weight, scale, key):
+    """Raise InputError naming the worst point and ``key`` unless all rcond >= RCOND_MIN."""
     bad = np.flatnonzero(~(rcond >= RCOND_MIN))
     if bad.size == 0:
         return
@@ -415,8 +418,8 @@ def _require_regular(rcond, points, nodes, indptr, indices, weight, scale):
     reason, extra = _diagnosis(seen, rcond[p])
     raise InputError(
         f"MLS shape functions: point {p} at ({points[p, 0]:.6g}, {points[p, 1]:.6g}) "
-        f"{reason} (weight {weight}, scale factor {scale:g}; {bad.size} of {len(points)} "
-        f"points fail): increase the scale factor, e.g. to {better:g}{extra}")
+        f"{reason} (weight {weight}, scale factor {scale:g} from {key}; {bad.size} of "
+        f"{len(points)} points fail): increase the scale factor, e.g. to {better:g}{extra}")
 
 
 def _diagnosis(seen, rcond):

@@ -9,12 +9,15 @@ Each weight peaks at ``r = 0``, decreases to 0 at ``r = 1`` and is zero for ``r 
   ``(exp(-(r/c)^2) - exp(-(1/c)^2)) / (1 - exp(-(1/c)^2))``; ``E-A`` is ``c = 0.5`` and
   ``E-B`` is ``c = 0.25`` (sharper, nearly interpolating). It is only C0 at ``r = 1``.
 
-A case names a weight by a string read by :func:`get_weight`. A :class:`Weight` is a small
-value object (an integer kind code and the parameter ``c``); numba kernels call
-:func:`weight_scalar` with those two numbers, and calling the object evaluates ``w`` and
-``dw/dr`` on whole arrays. numba's on-disk cache does not track calls across files:
-after editing this module, delete the ``*.nbi`` and ``*.nbc`` files in ``efg/__pycache__``
-so that the kernels of :mod:`efg.mls` are compiled again.
+A case names a weight by a string read by :func:`get_weight`. The grammar of the names
+(the families, the aliases ``Q``, ``E-A``, ``E-B`` and the range of ``c``) is
+:func:`soil.problems.weight_form`, shared with the load-time validation of a case, which
+must not import ``efg``. A :class:`Weight` is a small value object (an integer kind code
+and the parameter ``c``); numba kernels call :func:`weight_scalar` with those two numbers,
+and calling the object evaluates ``w`` and ``dw/dr`` on whole arrays. numba's on-disk
+cache does not track calls across files: after editing this module, delete the ``*.nbi``
+and ``*.nbc`` files in ``efg/__pycache__`` so that the kernels of :mod:`efg.mls` are
+compiled again.
 """
 
 import math
@@ -23,11 +26,10 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from soil.errors import InputError
+from soil.problems import weight_form
 
 QUARTIC, CUBIC, EXPONENTIAL = 0, 1, 2
-ALIASES = {"q": "quartic", "e-a": "exp:0.5", "e-b": "exp:0.25"}
-FORMS = "quartic (alias Q), cubic, exp:C with C > 0 (E-A = exp:0.5, E-B = exp:0.25)"
+_KINDS = {"quartic": QUARTIC, "cubic": CUBIC, "exp": EXPONENTIAL}
 
 
 @numba.njit(cache=True)
@@ -103,8 +105,9 @@ def get_weight(name):
     Parameters
     ----------
     name : str or Weight
-        ``quartic``, ``cubic`` or ``exp:C`` (any ``C > 0``), case-insensitive; aliases
-        ``Q``, ``E-A`` (``exp:0.5``) and ``E-B`` (``exp:0.25``). A Weight passes through.
+        ``quartic``, ``cubic`` or ``exp:C``, case-insensitive; aliases ``Q``, ``E-A``
+        (``exp:0.5``) and ``E-B`` (``exp:0.25``); see :func:`soil.problems.weight_form`.
+        A Weight passes through.
 
     Raises
     ------
@@ -118,17 +121,6 @@ def get_weight(name):
     """
     if isinstance(name, Weight):
         return name
-    key = str(name).strip().lower()
-    key = ALIASES.get(key, key)
-    if key == "quartic":
-        return Weight("quartic", QUARTIC)
-    if key == "cubic":
-        return Weight("cubic", CUBIC)
-    head, _, value = key.partition(":")
-    try:
-        c = float(value) if head == "exp" else math.nan
-    except ValueError:
-        c = math.nan
-    if not (math.isfinite(c) and c > 0):
-        raise InputError(f"weight {name!r} is unknown: use {FORMS}")
-    return Weight(f"exp:{c:g}", EXPONENTIAL, c)
+    family, c = weight_form(name)
+    kind = _KINDS[family]
+    return Weight(f"exp:{c:g}" if kind == EXPONENTIAL else family, kind, c)

@@ -18,13 +18,17 @@ Schema (every case has the same one; unknown keys are an error)::
 
     [geometry]
     shape = "rectangle"               # the only shape
-    width = 3.0                       # m, along x
-    height = 4.0                      # m, along y
+    width = 3.0                       # m, along x, in [1e-6, 1e6]
+    height = 4.0                      # m, along y, in [1e-6, 1e6]
 
     [discretisation]
     nx = 7                            # grid nodes along x (>= 2): spacing width/(nx-1)
     ny = 9                            # grid nodes along y (>= 2): spacing height/(ny-1)
     layout = "grid+centres"           # "grid" (default) or grid plus one node per cell centre
+                                      # (spacing aspect hx/hy in [1e-3, 1e3])
+    jitter = 0.0                      # interior nodes moved at random by up to this
+                                      # fraction of the spacing (0 <= jitter < 0.25)
+    seed = 0                          # seed of the jitter (numpy default_rng)
 
     [material]                        # soil.materials.material_from_spec, plus fluid keys:
     preset = "table1"
@@ -62,13 +66,21 @@ Schema (every case has the same one; unknown keys are an error)::
     solution = "timoshenko-beam"      # boundary data for "exact" edges, error reference
     P = 1000.0                        # ... and the solution's parameters
 
+    [diagnostics]                     # optional, both solvers
+    uniqueness = false                # per step, the smallest eigenvalue of the tangent
+                                      # restricted to the undrained constraint
+                                      # (soil.bifurcation; history column "uniqueness")
+
     [efg]                             # optional meshless settings (defaults shown)
-    weight_u = "quartic"              # MLS weight of u: quartic, cubic, exp:C (E-A = exp:0.5)
-    scale_u = 1.3                     # support = scale x distance to the 8th nearest node
+    weight_u = "quartic"              # MLS weight of u: quartic (Q), cubic or exp:C with
+                                      # 1e-3 <= C <= 1e3 (E-A = exp:0.5, E-B = exp:0.25)
+    scale_u = 1.3                     # support = scale x distance to the 8th nearest node,
+                                      # 1 <= scale <= 1000
     weight_p = "quartic"              # the same for the pore pressure p_w
     scale_p = 1.3
     cells = "delaunay"                # background cells: delaunay or squares
-    order = 2                         # Gauss order (squares: per direction; triangles: degree)
+    order = 2                         # Gauss order (squares: per direction; triangles:
+                                      # degree, at most 19)
     penalty = 1e6                     # penalty factor relative to the stiffness scale
     correction = "vci"                # consistent test gradients (efg.vci) or "none"
 
@@ -88,6 +100,33 @@ At a corner both edges' conditions apply; two different non-free kinds on the sa
 component of a corner are an error. Tractions are loads in excess of the initial state,
 which is taken as in equilibrium.
 
+Every number must be finite. Load-time bounds (:func:`case_from_dict` refuses a case
+outside them, naming the key, so that ``soilwater show`` fails wherever ``run`` would):
+
+* ``geometry.width`` and ``height`` in [1e-6, 1e6] m, and the grid spacing aspect
+  ``hx/hy = (width/(nx-1)) / (height/(ny-1))`` in [1e-3, 1e3]: bounds against absurd
+  input (a width of 1e300 overflows the EFG's cell search, inf breaks both solvers).
+  Within them a stretched plain grid still needs a larger EFG scale factor, about a
+  quarter of the aspect (long over short spacing) beyond an aspect of 4; the solver
+  reports that, naming the scale factor's key.
+* The displacement must be restrained against the three rigid motions: some edge's ``ux``
+  and some edge's ``uy`` ``fixed``, ``prescribed`` or ``exact`` (a ``rigid`` plate is
+  load-controlled and stops no translation), and rotation stopped by ``ux`` restrained on
+  the left or right edge, ``uy`` on the top or bottom edge, or ``ux`` on both the top and
+  bottom (``uy`` on both the left and right).
+* ``efg.scale_u`` and ``scale_p`` in [1, 1000]: below 1 a node's support stops short of
+  its 8th nearest node, the distance that defines it, and whether each point still sees
+  3 non-collinear nodes depends on the layout (on the built-in cases and their variants
+  the smallest working factor ranges from 0.69 to 0.90, with condition numbers down to
+  1e-7, and stretched grids need more); above 1000 the supports cover the body many times
+  over and the moment matrices' conditioning, falling as 1/scale^2, nears the MLS
+  safeguard (reached near 1e4 to 1e5).
+* ``efg.weight_u`` and ``weight_p``: :func:`weight_form` (outside 1e-3 <= C <= 1e3 the
+  exponential weight underflows to a spike or, above, equals its limit ``1 - r^2`` to
+  1e-6 while its formula loses digits and divides by zero near C = 1e8).
+* ``efg.order`` an integer >= 1, at most 19 with Delaunay cells (the highest triangle
+  rule of scikit-fem).
+
 Time stepping: ``steps`` gives equal steps; otherwise ``t_1 = dt0`` and
 ``t_{n+1} = t_n + min((growth - 1) t_n, dt_max)`` (time levels grow geometrically until the
 step reaches ``dt_max``), the last step cut to land on ``end``. This is MOOSE's Terzaghi
@@ -100,6 +139,7 @@ reverse); setting an edge's ``displacement`` replaces its ``ux`` and ``uy``.
 """
 
 import copy
+import math
 import re
 import tomllib
 from dataclasses import asdict, dataclass
@@ -116,12 +156,13 @@ KINDS = ("free", "fixed", "prescribed", "rigid", "exact")
 WATER = ("drained", "impermeable")
 LAYOUTS = ("grid", "grid+centres")
 SECTIONS = ("geometry", "discretisation", "material", "initial", "boundary", "loading",
-            "time", "probes", "exact", "efg")
+            "time", "probes", "exact", "diagnostics", "efg")
 MAX_STEPS = 100_000
 
 _KEYS = {
     "geometry": ("shape", "width", "height"),
-    "discretisation": ("nx", "ny", "layout"),
+    "discretisation": ("nx", "ny", "layout", "jitter", "seed"),
+    "diagnostics": ("uniqueness",),
     "initial": ("pore_pressure",),
     "edge": ("ux", "uy", "displacement", "traction", "water"),
     "loading": ("velocity_gradient", "load"),
@@ -132,6 +173,20 @@ _KEYS = {
 CORRECTIONS = ("vci", "none")
 CELLS = ("delaunay", "squares")
 ANALYSES = ("coupled", "static")
+LENGTHS = (1e-6, 1e6)
+"""Accepted range of ``geometry.width`` and ``height`` [m]."""
+ASPECTS = (1e-3, 1e3)
+"""Accepted range of the grid spacing aspect ``hx/hy``."""
+SCALES = (1.0, 1e3)
+"""Accepted range of the MLS support scale factors ``efg.scale_u`` and ``scale_p``."""
+MAX_TRIANGLE_ORDER = 19
+"""Highest degree of scikit-fem's triangle rules (``efg.order`` with Delaunay cells)."""
+WEIGHT_ALIASES = {"q": "quartic", "e-a": "exp:0.5", "e-b": "exp:0.25"}
+EXP_C = (1e-3, 1e3)
+"""Accepted range of the parameter C of the exponential weight ``exp:C``."""
+WEIGHT_FORMS = (f"quartic (alias Q), cubic, exp:C with {EXP_C[0]:g} <= C <= {EXP_C[1]:g} "
+                "(E-A = exp:0.5, E-B = exp:0.25)")
+_RESTRAINED = ("fixed", "prescribed", "exact")
 _GEOMETRIC = ("dt0", "growth", "dt_max")
 _NORMAL = {"left": "ux", "right": "ux", "bottom": "uy", "top": "uy"}
 _CORNERS = (("left", "bottom"), ("left", "top"), ("right", "bottom"), ("right", "top"))
@@ -150,11 +205,26 @@ class Geometry:
 
 @dataclass(frozen=True)
 class Discretisation:
-    """Regular grid of ``nx x ny`` nodes, optionally plus one node per cell centre."""
+    """Regular grid of ``nx x ny`` nodes, optionally plus one node per cell centre.
+
+    ``jitter`` moves every interior node by a uniform random offset of up to ``jitter``
+    times the grid spacing in each direction (boundary nodes stay on their edges), drawn
+    with ``numpy.random.default_rng(seed)``: a perturbation of the node set, used to probe
+    how a result depends on round-off-sized changes of the geometry.
+    """
 
     nx: int
     ny: int
     layout: str = "grid"
+    jitter: float = 0.0
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class Diagnostics:
+    """Optional per-step measurements: ``uniqueness`` (:mod:`soil.bifurcation`)."""
+
+    uniqueness: bool = False
 
 
 @dataclass(frozen=True)
@@ -271,7 +341,7 @@ class Probe:
 class EFGSettings:
     """Meshless settings: MLS weight and support scale factor for u and p_w, cells, penalty.
 
-    Weights are named as in :mod:`efg.weights` (``quartic``, ``cubic``, ``exp:0.5``, ...);
+    Weights are named as :func:`weight_form` reads them (``quartic``, ``exp:0.5``, ...);
     ``cells`` is ``delaunay`` (rebuilt every step) or ``squares`` (quarter cells along
     the boundary); ``order`` is the Gauss order of the cells; ``penalty`` is the penalty
     factor relative to the stiffness scale (P-wave modulus over nodal spacing);
@@ -317,6 +387,7 @@ class Case:
     probes: tuple[Probe, ...] = ()
     exact: tuple[tuple[str, object], ...] = ()
     efg: EFGSettings = EFGSettings()
+    diagnostics: Diagnostics = Diagnostics()
 
     def exact_solution(self):
         """``points -> (u, stress)`` of the ``[exact]`` solution, or None (soil.analytical)."""
@@ -344,10 +415,15 @@ class Case:
         d, g = self.discretisation, self.geometry
         x, y = np.linspace(0.0, g.width, d.nx), np.linspace(0.0, g.height, d.ny)
         grid = np.stack(np.meshgrid(x, y), axis=-1).reshape(-1, 2)
-        if d.layout == "grid":
+        if d.layout == "grid+centres":
+            xc, yc = (x[:-1] + x[1:]) / 2, (y[:-1] + y[1:]) / 2
+            grid = np.concatenate([grid, np.stack(np.meshgrid(xc, yc), axis=-1).reshape(-1, 2)])
+        if d.jitter == 0:
             return grid
-        xc, yc = (x[:-1] + x[1:]) / 2, (y[:-1] + y[1:]) / 2
-        return np.concatenate([grid, np.stack(np.meshgrid(xc, yc), axis=-1).reshape(-1, 2)])
+        interior = np.ones(len(grid), bool)
+        interior[self.boundary_loop()] = False
+        offset = np.random.default_rng(d.seed).uniform(-1, 1, (len(grid), 2))
+        return grid + interior[:, None] * d.jitter * offset * self.spacing
 
     def boundary_loop(self):
         """Indices into :meth:`nodes` of the boundary nodes, counter-clockwise, each once.
@@ -397,6 +473,7 @@ class Case:
             "time": time,
             "probes": {p.name: p.point for p in self.probes},
             "exact": dict(self.exact),
+            "diagnostics": asdict(self.diagnostics),
             "efg": self.efg.to_dict(),
         })
 
@@ -408,6 +485,58 @@ def _plain(value):
     if isinstance(value, (list, tuple)):
         return [_plain(v) for v in value]
     return value
+
+
+# -- MLS weight names ----------------------------------------------------------------------
+def weight_form(name, key=None):
+    """The family and parameter of an MLS weight name: the grammar of weight names.
+
+    :mod:`efg.weights` evaluates the weights and builds them through this function, so
+    that load-time validation (which must not import ``efg``) and the solver accept
+    exactly the same names.
+
+    Parameters
+    ----------
+    name : str
+        ``quartic``, ``cubic`` or ``exp:C`` (see :data:`EXP_C`), case-insensitive,
+        surrounding blanks ignored; aliases ``Q``, ``E-A`` (``exp:0.5``) and ``E-B``
+        (``exp:0.25``).
+    key : str, optional
+        The case entry holding the name (e.g. ``efg.weight_u``), for the message.
+
+    Returns
+    -------
+    family : str
+        ``"quartic"``, ``"cubic"`` or ``"exp"``.
+    c : float
+        The parameter C of ``exp:C`` (0 for the splines).
+
+    Raises
+    ------
+    InputError
+        For any other name, listing the valid forms.
+
+    Examples
+    --------
+    >>> weight_form(" E-B "), weight_form("Q")
+    (('exp', 0.25), ('quartic', 0.0))
+    >>> weight_form("exp:0", "efg.weight_p")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    soil.errors.InputError: efg.weight_p = 'exp:0' is unknown: use quartic (alias Q), ...
+    """
+    text = str(name).strip().lower()
+    text = WEIGHT_ALIASES.get(text, text)
+    if text in ("quartic", "cubic"):
+        return text, 0.0
+    head, _, value = text.partition(":")
+    try:
+        c = float(value) if head == "exp" else math.nan
+    except ValueError:
+        c = math.nan
+    label = f"weight {name!r}" if key is None else f"{key} = {name!r}"
+    require(EXP_C[0] <= c <= EXP_C[1], f"{label} is unknown: use {WEIGHT_FORMS}")
+    return "exp", c
 
 
 # -- reading and validating ----------------------------------------------------------------
@@ -522,7 +651,9 @@ def case_from_dict(data):
         probes=probes,
         exact=_exact(_section(data, "exact", {})),
         efg=_efg(_section(data, "efg", {})),
+        diagnostics=_diagnostics(_section(data, "diagnostics", {})),
     )
+    _require_aspect(case)
     _require_exact_if_used(case)
     case.times()
     return case
@@ -545,11 +676,11 @@ def _check_keys(table, allowed, where, what="key"):
 
 
 def _number(table, key, where, default=_REQUIRED):
-    """A float entry (ints accepted, bools not)."""
+    """A finite float entry (ints accepted, bools not)."""
     require(key in table or default is not _REQUIRED, f"{where}.{key} is missing: set it")
     value = table.get(key, default)
-    require(isinstance(value, (int, float)) and not isinstance(value, bool),
-            f"{where}.{key} = {value!r} must be a number")
+    require(isinstance(value, (int, float)) and not isinstance(value, bool)
+            and math.isfinite(value), f"{where}.{key} = {value!r} must be a finite number")
     return float(value)
 
 
@@ -583,8 +714,9 @@ def _geometry(table):
     _check_keys(table, _KEYS["geometry"], "geometry")
     _string(table, "shape", "geometry", "rectangle", ("rectangle",))
     width, height = _number(table, "width", "geometry"), _number(table, "height", "geometry")
-    require(width > 0 and height > 0, f"geometry: width = {width} and height = {height} "
-            "must be positive (m)")
+    for key, value in (("width", width), ("height", height)):
+        require(LENGTHS[0] <= value <= LENGTHS[1], f"geometry.{key} = {value:g} must lie "
+                f"in [{LENGTHS[0]:g}, {LENGTHS[1]:g}] m: give the size of the rectangle in m")
     return Geometry(width=width, height=height)
 
 
@@ -593,8 +725,32 @@ def _discretisation(table):
     nx, ny = _integer(table, "nx", "discretisation"), _integer(table, "ny", "discretisation")
     require(nx >= 2, f"discretisation.nx = {nx} must be at least 2 (nodes along x)")
     require(ny >= 2, f"discretisation.ny = {ny} must be at least 2 (nodes along y)")
+    jitter = _number(table, "jitter", "discretisation", 0.0)
+    require(0 <= jitter < 0.25, f"discretisation.jitter = {jitter} must lie in [0, 0.25) "
+            "(a fraction of the nodal spacing)")
+    seed = table.get("seed", 0)
+    require(isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0,
+            f"discretisation.seed = {seed!r} must be a non-negative integer")
     return Discretisation(nx=nx, ny=ny,
-                          layout=_string(table, "layout", "discretisation", "grid", LAYOUTS))
+                          layout=_string(table, "layout", "discretisation", "grid", LAYOUTS),
+                          jitter=jitter, seed=seed)
+
+
+def _require_aspect(case):
+    """Refuse sliver cells: the spacing aspect hx/hy must lie in :data:`ASPECTS`."""
+    hx, hy = case.spacing
+    require(ASPECTS[0] <= hx / hy <= ASPECTS[1], f"discretisation: the grid spacing aspect "
+            f"hx/hy = {hx:g}/{hy:g} = {hx / hy:g} (geometry.width/(discretisation.nx - 1) "
+            f"over geometry.height/(discretisation.ny - 1)) must lie in [{ASPECTS[0]:g}, "
+            f"{ASPECTS[1]:g}]: change discretisation.nx or discretisation.ny")
+
+
+def _diagnostics(table):
+    _check_keys(table, _KEYS["diagnostics"], "diagnostics")
+    value = table.get("uniqueness", False)
+    require(isinstance(value, bool), f"diagnostics.uniqueness = {value!r} must be true or "
+            "false")
+    return Diagnostics(uniqueness=value)
 
 
 def _material(table):
@@ -650,7 +806,31 @@ def _boundary(table, loading):
             require(len(kinds - {"free"}) <= 1, f"boundary.{a}.{comp} and boundary.{b}."
                     f"{comp} conflict at their corner ({' vs '.join(sorted(kinds))}): "
                     "make them agree or set one free")
+    _require_supports(boundary)
     return boundary
+
+
+def _require_supports(boundary):
+    """Refuse a body free to move rigidly: x and y translation and rotation must be stopped.
+
+    ``fixed``, ``prescribed`` and ``exact`` restrain a component; a ``rigid`` plate is
+    load-controlled and lets its edge settle. It would stop rotation, but never decides:
+    the uy that stops y translation is on a horizontal edge (stopping rotation too) or
+    on a vertical one, which may not meet the plate's edge with another kind.
+    """
+    ux = {side for side, edge in boundary.items() if edge.ux in _RESTRAINED}
+    uy = {side for side, edge in boundary.items() if edge.uy in _RESTRAINED}
+    kinds = '"fixed", "prescribed" or "exact"'
+    require(ux, "boundary: the body is not supported along x (no edge restrains ux): set "
+            f"an edge's ux to {kinds}, e.g. boundary.left.ux = \"fixed\"")
+    require(uy, "boundary: the body is not supported along y (no edge restrains uy; a "
+            f"rigid plate carries a load): set an edge's uy to {kinds}, e.g. "
+            "boundary.bottom.uy = \"fixed\"")
+    require(ux & {"left", "right"} or uy & {"bottom", "top"}
+            or {"bottom", "top"} <= ux or {"left", "right"} <= uy,
+            "boundary: the body is not supported against rotation: restrain ux on the left "
+            "or right edge or uy on the top or bottom edge (e.g. boundary.left.ux = "
+            "\"fixed\")")
 
 
 def _edge(table, side, loading):
@@ -713,8 +893,8 @@ def _efg(table):
     _check_keys(table, _KEYS["efg"], "efg")
     defaults = EFGSettings()
     order = table.get("order", defaults.order)
-    require(isinstance(order, int) and order >= 1, f"efg.order = {order!r} must be an "
-            "integer >= 1")
+    require(isinstance(order, int) and not isinstance(order, bool) and order >= 1,
+            f"efg.order = {order!r} must be an integer >= 1")
     settings = EFGSettings(
         weight_u=_string(table, "weight_u", "efg", defaults.weight_u),
         scale_u=_number(table, "scale_u", "efg", defaults.scale_u),
@@ -724,9 +904,20 @@ def _efg(table):
         order=order,
         penalty=_number(table, "penalty", "efg", defaults.penalty),
         correction=_string(table, "correction", "efg", defaults.correction, CORRECTIONS))
-    for key in ("scale_u", "scale_p", "penalty"):
-        require(getattr(settings, key) > 0, f"efg.{key} = {getattr(settings, key)} must be "
-                "positive")
+    require(settings.cells != "delaunay" or order <= MAX_TRIANGLE_ORDER,
+            f"efg.order = {order} must be at most {MAX_TRIANGLE_ORDER} with efg.cells = "
+            "\"delaunay\" (the highest triangle rule): lower it or use efg.cells = "
+            "\"squares\"")
+    for field in ("u", "p"):
+        key, scale = f"efg.scale_{field}", getattr(settings, f"scale_{field}")
+        weight_form(getattr(settings, f"weight_{field}"), f"efg.weight_{field}")
+        require(scale >= SCALES[0], f"{key} = {scale:g} must be >= {SCALES[0]:g} (each "
+                "node's support must reach its 8th nearest node): increase the scale "
+                f"factor, e.g. to {defaults.scale_u:g}")
+        require(scale <= SCALES[1], f"{key} = {scale:g} must be <= {SCALES[1]:g} (beyond, "
+                "the MLS moment matrices approach singularity): use 1.2 to 2, e.g. "
+                f"{defaults.scale_u:g}")
+    require(settings.penalty > 0, f"efg.penalty = {settings.penalty:g} must be positive")
     return settings
 
 
@@ -790,7 +981,8 @@ def builtin_cases():
 
 
 def _edges(left, right, bottom, top):
-    return {"left": left, "right": right, "bottom": bottom, "top": top}
+    """The four edge tables, each its own copy (an override of one edge leaves the others)."""
+    return {"left": dict(left), "right": dict(right), "bottom": dict(bottom), "top": dict(top)}
 
 
 _EXACT = {"ux": "exact", "uy": "exact"}

@@ -7,10 +7,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from efg.boundary import boundary_points, segment_edges
+from efg.mls import ShapeFunctions
+from efg.statics import background
+from efg.weights import get_weight
 from soil.camclay import CamClay
 from soil.elastic import LinearElastic
 from soil.errors import InputError
-from soil.problems import builtin_cases, case_from_dict, load_case
+from soil.problems import (EDGES, MAX_TRIANGLE_ORDER, SCALES, builtin_cases, case_from_dict,
+                           load_case)
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
 BUILTIN = builtin_cases()
@@ -125,8 +130,40 @@ BAD = [
     ("unconfined-compression", ["material.colour=1"], "colour"),
 ]
 
+FREE = [f"boundary.{side}.displacement=free" for side in EDGES]
+# Load-time validation: whatever ``run`` would refuse, ``show`` refuses too.
+REFUSED = [
+    ("terzaghi", ["efg.weight_u=gauss"], "efg.weight_u = 'gauss'"),
+    ("terzaghi", ["efg.weight_p=exp:0"], "efg.weight_p = 'exp:0'"),
+    ("terzaghi", ["efg.weight_u=exp:-1"], "efg.weight_u = 'exp:-1'"),
+    ("terzaghi", ["efg.weight_p=exp:abc"], "efg.weight_p = 'exp:abc'"),
+    ("terzaghi", ["efg.weight_p=exp:1e12"], "efg.weight_p = 'exp:1e12'"),
+    ("terzaghi", ["efg.cells=hexagons"], "efg.cells = 'hexagons'"),
+    ("terzaghi", ["efg.scale_u=0.1"], "efg.scale_u = 0.1 must be >= 1"),
+    ("terzaghi", ["efg.scale_p=0.9"], "efg.scale_p = 0.9 must be >= 1"),
+    ("terzaghi", ["efg.scale_p=1e5"], "efg.scale_p = 100000 must be <= 1000"),
+    ("terzaghi", ["efg.scale_u=nan"], "efg.scale_u = nan"),
+    ("terzaghi", ["efg.order=0"], "efg.order = 0"),
+    ("terzaghi", ["efg.order=true"], "efg.order = True"),
+    ("terzaghi", [f"efg.order={MAX_TRIANGLE_ORDER + 1}"], "efg.order = 20"),
+    ("terzaghi", ["efg.penalty=inf"], "efg.penalty = inf"),
+    ("terzaghi", ["geometry.width=inf"], "geometry.width = inf"),
+    ("terzaghi", ["geometry.width=nan"], "geometry.width = nan"),
+    ("terzaghi", ["geometry.width=1e300"], "geometry.width = 1e+300"),
+    ("terzaghi", ["geometry.width=0"], "geometry.width = 0"),
+    ("terzaghi", ["geometry.height=-1"], "geometry.height = -1"),
+    ("terzaghi", ["time.end=inf"], "time.end = inf"),
+    ("terzaghi", ["discretisation.ny=5002"], "discretisation.ny"),  # hx/hy = 1000.2
+    ("soil-column", ["discretisation.nx=2002"], "discretisation.nx"),  # hx/hy = 1/1000.5
+    ("soil-column", FREE, "not supported along x (no edge restrains ux)"),
+    ("mandel", ["boundary.bottom.uy=free"], "not supported along y"),
+    ("soil-column", FREE[:2] + ["boundary.bottom.uy=free", "boundary.left.uy=fixed"],
+     "not supported against rotation: restrain ux on the left or right edge or uy on the "
+     "top or bottom edge"),
+]
 
-@pytest.mark.parametrize("case,overrides,names", BAD)
+
+@pytest.mark.parametrize("case,overrides,names", BAD + REFUSED)
 def test_bad_input_names_the_parameter(case, overrides, names):
     with pytest.raises(InputError) as info:
         load_case(case, overrides)
@@ -153,3 +190,115 @@ def test_lambda_not_above_kappa_in_a_case_file(tmp_path):
     path.write_text(text.replace('model = "original"', 'model = "original"\nlambda = 0.04'))
     with pytest.raises(InputError, match="lambda"):
         load_case(path)
+
+
+@pytest.mark.parametrize("case,overrides", [
+    ("terzaghi", ["discretisation.ny=5001"]),        # hx/hy = 1000: the bounds are inclusive
+    ("soil-column", ["discretisation.nx=2001"]),     # hx/hy = 1/1000
+    ("simple-shear", ["geometry.width=1e-6", "geometry.height=1e-6",
+                      "probes.centre=[5e-7, 5e-7]"]),
+    ("simple-shear", ["geometry.width=1e6", "geometry.height=1e6",
+                      "probes.centre=[5e5, 5e5]"]),
+    ("terzaghi", [f"efg.scale_u={SCALES[0]}", f"efg.scale_p={SCALES[1]}"]),
+    ("terzaghi", ["efg.weight_u=E-A", "efg.weight_p= exp:1e-3 "]),
+    ("terzaghi", [f"efg.order={MAX_TRIANGLE_ORDER + 1}", "efg.cells=squares"]),
+])
+def test_values_at_the_bounds_load(case, overrides):
+    load_case(case, overrides)
+
+
+def with_edges(**edges):
+    """Terzaghi's column with no load and the given ``{side: {component: kind}}`` only."""
+    data = BUILTIN["terzaghi"].to_dict()
+    for side in EDGES:
+        data["boundary"][side].update(ux="free", uy="free", traction=[0.0, 0.0])
+        data["boundary"][side].update(edges.get(side, {}))
+    return case_from_dict(data)
+
+
+@pytest.mark.parametrize("edges", [
+    {"left": {"ux": "fixed"}, "bottom": {"uy": "fixed"}},           # ux on a vertical edge
+    {"bottom": {"ux": "fixed", "uy": "fixed"}},                     # uy on a horizontal edge
+    {"left": {"ux": "fixed"}, "bottom": {"uy": "fixed"}, "top": {"uy": "rigid"}},
+    {"bottom": {"ux": "fixed"}, "top": {"ux": "fixed"}, "left": {"uy": "fixed"}},
+    {"bottom": {"ux": "fixed"}, "left": {"uy": "fixed"}, "right": {"uy": "fixed"}},
+    {"top": {"ux": "fixed", "uy": "fixed"}},
+])
+def test_supported_boundaries_load(edges):
+    assert with_edges(**edges).boundary
+
+
+@pytest.mark.parametrize("edges,why", [
+    ({}, "along x"),
+    ({"bottom": {"uy": "fixed"}}, "along x"),
+    ({"left": {"ux": "fixed"}}, "along y"),
+    ({"left": {"ux": "fixed"}, "top": {"uy": "rigid"}}, "along y"),  # a plate is a load
+    ({"bottom": {"ux": "fixed"}, "left": {"uy": "fixed"}}, "rotation"),  # about (0, 0)
+    ({"top": {"ux": "fixed"}, "right": {"uy": "fixed"}}, "rotation"),   # about (W, H)
+    ({"top": {"ux": "fixed"}, "bottom": {"ux": "fixed"}}, "along y"),
+])
+def test_unsupported_boundaries_are_refused(edges, why):
+    with pytest.raises(InputError, match=f"^boundary.*{why}"):
+        with_edges(**edges)
+
+
+@pytest.mark.parametrize("name", list(BUILTIN))
+def test_builtin_boundaries_are_supported_and_checked(name):
+    assert load_case(name).boundary == BUILTIN[name].boundary
+    with pytest.raises(InputError, match="not supported along x"):
+        load_case(name, FREE)
+
+
+def test_override_of_one_edge_leaves_the_others():
+    case = load_case("terzaghi", ["boundary.left.uy=fixed"])  # left and right alike before
+    assert (case.boundary.left.uy, case.boundary.right.uy) == ("fixed", "free")
+
+
+@pytest.mark.parametrize("name", ["quartic", "Q", " cubic ", "E-A", "e-b", "exp:0.3",
+                                  "exp:1e-3", "exp:1000", "gauss", "exp:", "exp:0", "exp:-1",
+                                  "exp:abc", "exp:inf", "exp:nan", "exp:1e-4", "exp:1001",
+                                  "quartic:2"])
+def test_cases_accept_exactly_the_weights_of_the_solver(name):
+    """One grammar: load-time validation and efg.weights accept the same names."""
+    def accepted(check):
+        try:
+            check()
+        except InputError:
+            return False
+        return True
+
+    assert accepted(lambda: load_case("terzaghi", [f'efg.weight_p="{name}"'])) \
+        == accepted(lambda: get_weight(name))
+
+
+def test_triangle_order_bound_is_scikit_fems():
+    from skfem.quadrature import get_quadrature
+    from skfem.refdom import RefTri
+
+    get_quadrature(RefTri, MAX_TRIANGLE_ORDER)
+    with pytest.raises(NotImplementedError):
+        get_quadrature(RefTri, MAX_TRIANGLE_ORDER + 1)
+
+
+@pytest.mark.parametrize("name", list(BUILTIN))
+def test_smallest_accepted_scale_works_on_every_builtin(name):
+    """At scale factor SCALES[0] every first-step MLS build succeeds, for every weight and
+    cell type: the domain and boundary integration points and the nodes."""
+    for cells in ("delaunay", "squares"):
+        case = load_case(name, [f"efg.cells={cells}"])
+        nodes, loop = case.nodes(), case.boundary_loop()
+        edges = segment_edges(nodes, loop, case.geometry)
+        points = (background(case, nodes, loop, case.efg).points,
+                  boundary_points(nodes, loop, edges).points, nodes)
+        for weight in ("quartic", "cubic", "exp:0.5", "exp:0.25"):
+            for at in points:
+                assert ShapeFunctions.build(nodes, at, weight, SCALES[0]).rcond.min() > 1e-5
+
+
+def test_small_support_message_names_the_scale_key():
+    nodes = load_case("unconfined-compression").nodes()
+    with pytest.raises(InputError) as info:
+        ShapeFunctions.build(nodes, nodes + 0.25, "quartic", 0.3, key="efg.scale_p")
+    assert "scale factor 0.3 from efg.scale_p;" in str(info.value)
+    with pytest.raises(InputError, match="scale factor 0.3 from efg.scale_u;"):
+        ShapeFunctions.build(nodes, nodes + 0.25, "quartic", 0.3)
