@@ -6,9 +6,11 @@ Dask distributed scheduler (``dask=ADDRESS``, optional extra ``soilwater[dask]``
 returns one :class:`Outcome` per job, in order. A job that fails is an outcome with its
 error; the others complete.
 
-Results are cached on disk under a key hashing the resolved case, the method and the
-source code of the solvers (so any change to ``soil/``, ``efg/`` or ``fem_reference/``
-invalidates the cache): rerunning a report only recomputes what changed.
+Results are cached on disk under a key hashing the resolved case, the method, the linear
+solver (name and version, :func:`soil.linear.identity`) and the source code of the solvers
+(so any change to ``soil/``, ``efg/`` or ``fem_reference/`` invalidates the cache):
+rerunning a report only recomputes what changed, and a result made with one linear solver
+is never reused for another.
 """
 
 import hashlib
@@ -26,6 +28,7 @@ from tqdm import tqdm
 
 from fem_reference.spaces import PAIRS
 from soil.errors import SoilwaterError
+from soil.linear import identity, linear_solver
 from soil.problems import load_case
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -38,17 +41,21 @@ COUNTS = {"runs": 0, "cached": 0}
 
 @dataclass(frozen=True)
 class Job:
-    """One run: a case, a method and overrides ``("section.key=value", ...)``."""
+    """One run: a case, a method, overrides ``("section.key=value", ...)`` and the linear
+    solver (``"pardiso"``, ``"superlu"`` or None for :func:`soil.linear.backend`'s choice)."""
 
     case: str
     method: str
     overrides: tuple = ()
     labels: tuple = field(default=(), compare=False)
+    linear_solver: str | None = None
 
     def key(self):
-        """Cache key: the resolved case, the method and the solvers' source code."""
+        """Cache key: the resolved case, the method, the linear solver and the code."""
+        with linear_solver(self.linear_solver):
+            solver = identity()
         spec = {"case": load_case(self.case, self.overrides).to_dict(),
-                "method": self.method, "code": code_version()}
+                "method": self.method, "linear_solver": solver, "code": code_version()}
         return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:24]
 
 
@@ -108,7 +115,8 @@ def execute(job, cache_dir=CACHE):
         if cached is not None:
             return Outcome(job, cached, None, time.perf_counter() - tic, True)
         case = load_case(job.case, job.overrides)
-        result = solver(job.method)(case, progress=False)
+        with linear_solver(job.linear_solver):
+            result = solver(job.method)(case, progress=False)
         _write_cache(path, result)
         return Outcome(job, result, None, time.perf_counter() - tic, False)
     except (SoilwaterError, ArithmeticError, ValueError) as err:

@@ -17,6 +17,8 @@ while it contracts the Newton residual at least :data:`CONTRACTION`-fold per ite
 
 import os
 import weakref
+from contextlib import contextmanager
+from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 import scipy.sparse as sp
@@ -48,6 +50,43 @@ def backend():
     if choice:
         return choice
     return "pardiso" if _pardiso_available() else "superlu"
+
+
+def identity():
+    """``"name version"`` of the back-end in use, e.g. ``"superlu scipy 1.14.1"`` or
+    ``"pardiso pypardiso 0.4.6 mkl 2025.0.1"``: results are reproducible only to
+    round-off across back-ends, so caches and sidecars record it."""
+    if backend() == "superlu":
+        import scipy
+
+        return f"superlu scipy {scipy.__version__}"
+    return "pardiso " + " ".join(f"{name} {_version(name)}" for name in ("pypardiso", "mkl"))
+
+
+def _version(distribution):
+    try:
+        return version(distribution)
+    except PackageNotFoundError:
+        return "unknown"
+
+
+@contextmanager
+def linear_solver(name):
+    """Use the back-end ``name`` (``"pardiso"``, ``"superlu"``; None: leave the choice to
+    :func:`backend`) inside the ``with`` block, through ``SOILWATER_LINEAR_SOLVER``."""
+    if name is None:
+        yield
+        return
+    previous = os.environ.get("SOILWATER_LINEAR_SOLVER")
+    os.environ["SOILWATER_LINEAR_SOLVER"] = name
+    try:
+        backend()
+        yield
+    finally:
+        if previous is None:
+            del os.environ["SOILWATER_LINEAR_SOLVER"]
+        else:
+            os.environ["SOILWATER_LINEAR_SOLVER"] = previous
 
 
 def must_refactorise(lu, residual, previous):
