@@ -57,10 +57,11 @@ from efg.boundary import (boundary_points, conditions, penalty_coefficients,
                           segment_edges)
 from efg.mls import ShapeFunctions
 from efg.statics import background, cauchy_traction
+from soil.bifurcation import restricted_eigenvalue
 from soil.coupling import (MAX_ITERATIONS, TOLERANCE, Scales, axial_strain, march,
                            stretching_error)
 from soil.errors import ConvergenceError
-from soil.linear import backend, factorise, must_refactorise
+from soil.linear import factorise, identity, must_refactorise
 from soil.kinematics import (IDENTITY, in_plane, invariants, prescribed_increment,
                              spatial_tangent, strain_increment)
 from soil.results import Result, Snapshot
@@ -78,6 +79,7 @@ class Points:
     plate_gap: np.ndarray    # (G,) u_y^h - plate at the plate's points
     probes: np.ndarray       # (P, 2) current probe positions
     stretching: np.ndarray   # (N, 4) nodal stretching D^I of the last step [1/s]
+    uniqueness: float = 0.0  # soil.bifurcation indicator of the last step (if asked for)
 
 
 @dataclass
@@ -128,7 +130,7 @@ def solve(case, progress=True):
         stats=stats, progress=progress, desc=f"efg {case.name}")
     stats["timings"]["total_s"] = time.perf_counter() - tic
     summary = {"steps": len(history), "dofs": 3 * len(case.nodes()), "tolerance": TOLERANCE,
-               "linear_solver": backend(), **stats, **_penalties(model, case.times())}
+               "linear_solver": identity(), **stats, **_penalties(model, case.times())}
     return Result(case, "efg", case.efg.to_dict(), history, snapshots, summary)
 
 
@@ -228,19 +230,7 @@ def _step(model, points, t0, t1, stats):
 
         if must_refactorise(lu, residual, previous):      # tangent, then factorise it
             tic = time.perf_counter()
-            A = spatial_tangent(tangent, in_plane(stress), sig)
-            coeff = np.zeros((M, 3, 3, 3, 3))        # fields (ux, uy, p_w) x (phi, d/dx, d/dy)
-            coeff[:, :2, :, :2, :] = _reference(wJ[:, None, None, None, None] * A, Finv, Finv)
-            coeff[:, :2, 1:, 2, 0] = -fluid.biot_alpha * (wJ[:, None, None]
-                                                         * np.swapaxes(Finv, 1, 2))
-            coeff[:, 2, 0, :2, 1:] = coeff[:, :2, 1:, 2, 0]
-            coeff[:, 2, 0, 2, 0] = -fluid.storage * disc.w
-            coeff[:, 2, 1, 2, 1] = coeff[:, 2, 2, 2, 2] = -dt * fluid.mobility * disc.w
-            pen = np.zeros((len(disc.bp.weights), 3, 3, 3, 3))
-            constrained = bc.constrained | np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
-            pen[:, :2, :, :2, :] = penalty_coefficients(disc.bp, constrained, alpha_u)
-            pen[:, 2, 0, 2, 0] = -alpha_p * disc.bp.weights * bc.drained
-            K = disc.tangent(coeff, pen)
+            K = _tangent(model, disc, stress, sig, tangent, wJ, Finv, dt, alpha_u, alpha_p)
             K = _bordered(K, disc, n, rigid_w, c_mean, model.scales.pin_pressure)
             toc = time.perf_counter()
             stats["timings"]["assembly_s"] += toc - tic
@@ -254,7 +244,45 @@ def _step(model, points, t0, t1, stats):
         stats["timings"]["solve_s"] += time.perf_counter() - tic
         du, p, plate, lam = _advance(dx, du, p, plate, lam, n, bc, model)
 
-    return _finish(model, points, disc, du, p, plate, gap, plate_gap, dt), iteration, residual
+    done = _finish(model, points, disc, du, p, plate, gap, plate_gap, dt)
+    if case.diagnostics.uniqueness:
+        K = _tangent(model, disc, stress, sig, tangent, wJ, Finv, dt, alpha_u, alpha_p)
+        done.uniqueness = _uniqueness(model, disc, K, n)
+    return done, iteration, residual
+
+
+def _tangent(model, disc, stress, sig, tangent, wJ, Finv, dt, alpha_u, alpha_p):
+    """The Newton tangent of ``(ux, uy, p_w)`` (fields blocked) at the current iterate:
+    material tangent, rotation and change of area (:func:`spatial_tangent`) pulled back
+    to x_n, coupling, storage, flow and the penalties."""
+    fluid, bc, M = model.case.fluid, disc.bc, len(disc.w)
+    A = spatial_tangent(tangent, in_plane(stress), sig)
+    coeff = np.zeros((M, 3, 3, 3, 3))        # fields (ux, uy, p_w) x (phi, d/dx, d/dy)
+    coeff[:, :2, :, :2, :] = _reference(wJ[:, None, None, None, None] * A, Finv, Finv)
+    coeff[:, :2, 1:, 2, 0] = -fluid.biot_alpha * (wJ[:, None, None]
+                                                 * np.swapaxes(Finv, 1, 2))
+    coeff[:, 2, 0, :2, 1:] = coeff[:, :2, 1:, 2, 0]
+    coeff[:, 2, 0, 2, 0] = -fluid.storage * disc.w
+    coeff[:, 2, 1, 2, 1] = coeff[:, 2, 2, 2, 2] = -dt * fluid.mobility * disc.w
+    pen = np.zeros((len(disc.bp.weights), 3, 3, 3, 3))
+    constrained = bc.constrained | np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
+    pen[:, :2, :, :2, :] = penalty_coefficients(disc.bp, constrained, alpha_u)
+    pen[:, 2, 0, 2, 0] = -alpha_p * disc.bp.weights * bc.drained
+    return disc.tangent(coeff, pen)
+
+
+def _uniqueness(model, disc, K, n):
+    """:func:`soil.bifurcation.restricted_eigenvalue` of a step's converged tangent over
+    the initial P-wave modulus: the displacement block (penalties included) on the
+    undrained constraint (the pressure rows), against the H1 Gram matrix of the trial
+    functions (length scale: the body's height)."""
+    su, W = disc.su, sp.diags(disc.w)
+    scalar = (su.dphi_dx.T @ W @ su.dphi_dx + su.dphi_dy.T @ W @ su.dphi_dy
+              + su.phi.T @ W @ su.phi / model.case.geometry.height**2)
+    K = sp.csr_matrix(K)
+    value = restricted_eigenvalue(K[:2 * n, :2 * n], K[2 * n:3 * n, :2 * n],
+                                  sp.block_diag([scalar, scalar]))
+    return value / model.scales.modulus
 
 
 def _roundoff(disc, points, du, du_bar, p, plate, alpha_u, alpha_p, rigid_w):
@@ -382,17 +410,17 @@ def _discretise(model, nodes, evaluation, timings):
     timings["cells_s"] += toc - tic
     same = (s.weight_u, s.scale_u) == (s.weight_p, s.scale_p)
 
-    def build(points, weight, scale):
-        return ShapeFunctions.build(nodes, points, weight, scale)
+    def build(points, field="u"):
+        return ShapeFunctions.build(nodes, points, getattr(s, f"weight_{field}"),
+                                    getattr(s, f"scale_{field}"), key=f"efg.scale_{field}")
 
-    su, sub = build(quad.points, s.weight_u, s.scale_u), build(bp.points, s.weight_u, s.scale_u)
-    sp_, spb = ((su, sub) if same else (build(quad.points, s.weight_p, s.scale_p),
-                                        build(bp.points, s.weight_p, s.scale_p)))
+    su, sub = build(quad.points), build(bp.points)
+    sp_, spb = (su, sub) if same else (build(quad.points, "p"), build(bp.points, "p"))
     tu, tp = su, sp_
     if s.correction == "vci":
         tu = vci.corrected(su, quad.weights, sub, bp.weights, bp.normal)
         tp = tu if same else vci.corrected(sp_, quad.weights, spb, bp.weights, bp.normal)
-    at = build(evaluation, s.weight_u, s.scale_u)
+    at = build(evaluation)
     n = len(nodes)
     at_points = _AtPoints(_rows(at, slice(0, n)), _rows(at, slice(n, None)))
     disc = _Discretisation(quad.weights, su, sp_, tu, tp, bp, sub, spb,
@@ -467,19 +495,22 @@ def _history_row(model, points, t, dt, info):
     probes = {}
     if len(points.probes):
         s = case.efg
-        shape = ShapeFunctions.build(points.nodes, points.probes, s.weight_p, s.scale_p)
+        shape = ShapeFunctions.build(points.nodes, points.probes, s.weight_p, s.scale_p,
+                                     key="efg.scale_p")
         probes = {f"p_w@{pr.name}": v for pr, v in zip(case.probes, shape.phi @ points.p)}
     x0 = case.nodes()[top]
     return {"time": t, "eps_a": axial_strain(case, points.nodes[top, 1]), "p": p.mean(),
             "q": q.mean(), "err": stretching_error(case, points.stretching[:, 1]),
             "gamma": np.mean(points.nodes[top, 0] - x0[:, 0]) / case.geometry.height,
             "dt": dt, "iterations": info["iterations"], "substeps": info["substeps"],
-            "residual": info["residual"], **probes}
+            "residual": info["residual"], **probes,
+            **({"uniqueness": points.uniqueness} if case.diagnostics.uniqueness else {})}
 
 
 def _snapshot(model, points, t):
     s = model.case.efg
-    at = ShapeFunctions.build(points.nodes, points.nodes, s.weight_p, s.scale_p)
+    at = ShapeFunctions.build(points.nodes, points.nodes, s.weight_p, s.scale_p,
+                              key="efg.scale_p")
     p, q = invariants(points.stress)
     data = {"u": points.nodes - model.case.nodes(), "p_w": at.phi @ points.p,
             "p_eff": p, "q": q, "stretching": points.stretching,

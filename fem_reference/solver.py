@@ -57,12 +57,13 @@ import scipy.sparse as sp
 
 from fem_reference.assembly import Shapes, block
 from fem_reference.spaces import Space, cell_bases
+from soil.bifurcation import restricted_eigenvalue
 from soil.coupling import (MAX_ITERATIONS, TOLERANCE, Scales, axial_strain, march,
                            stretching_error)
 from soil.errors import ConvergenceError, InputError
 from soil.kinematics import (IDENTITY, in_plane, invariants, prescribed_increment,
                              spatial_tangent, strain_increment)
-from soil.linear import backend, factorise, must_refactorise
+from soil.linear import factorise, identity, must_refactorise
 from soil.results import Result, Snapshot
 
 
@@ -167,6 +168,7 @@ class State:
     weights: np.ndarray      # (E Q,) current quadrature weights [m2]
     stretching: np.ndarray   # (E Q, 4) stretching of the last step [1/s]
     velocity: np.ndarray     # (2 n_u,) du/dt of the last step [m/s]: the predictor
+    uniqueness: float = 0.0  # soil.bifurcation indicator of the last step (if asked for)
 
 
 def solve(case, method="fem-th", progress=True):
@@ -203,7 +205,7 @@ def solve(case, method="fem-th", progress=True):
     space = model.space
     summary = {"steps": len(history), "dofs": int(2 * space.n_u + space.n_p),
                "elements": int(space.mesh0.t.shape[1]), "tolerance": TOLERANCE,
-               "linear_solver": backend(), "stabilisation_beta": model.beta,
+               "linear_solver": identity(), "stabilisation_beta": model.beta,
                **stats}
     options = {"elements": f"{space.pair.u_element.__name__}/"
                            f"{space.pair.p_element.__name__}",
@@ -314,8 +316,12 @@ def _step(model, current, t0, t1, stats):
 
     n_v = len(current.vertices)
     du = x[:2 * n_u].reshape(2, n_u)[:, :n_v].T
+    uniqueness = 0.0
+    if case.diagnostics.uniqueness:
+        K = con.T.T @ _tangent(model, disc, stress, total, tangent, wJ, Finv, dt) @ con.T
+        uniqueness = _uniqueness(model, disc, K)
     return State(current.vertices + du, stress, state, x[2 * n_u:], dw_u * J,
-                 deps / dt, x[:2 * n_u] / dt), iteration, residual
+                 deps / dt, x[:2 * n_u] / dt, uniqueness), iteration, residual
 
 
 def _residual(model, disc, current, x, stress, J, Finv, dt):
@@ -362,6 +368,24 @@ def _tangent(model, disc, stress, total, tangent, wJ, Finv, dt):
                      block(disc.p, disc.p, pp.reshape(*shape, 1, 3, 1, 3))]], format="csr")
 
 
+def _uniqueness(model, disc, K):
+    """:func:`soil.bifurcation.restricted_eigenvalue` of a step's converged tangent
+    (essential conditions eliminated, the plate included) over the initial P-wave modulus:
+    the displacement block on the undrained constraint (the free pressure rows), against
+    the H1 Gram matrix of the displacement basis (length scale: the body's height)."""
+    E, Q = disc.dx.shape
+    gram = np.zeros((E, Q, 2, 3, 2, 3))
+    for f in range(2):
+        gram[:, :, f, 0, f, 0] = disc.dx / model.case.geometry.height**2
+        gram[:, :, f, 1, f, 1] = gram[:, :, f, 2, f, 2] = disc.dx
+    con = model.constraints
+    u = con.T[:, con.is_u][:2 * model.space.n_u]
+    G = u.T @ block(disc.u, disc.u, gram) @ u
+    K = sp.csr_matrix(K)
+    value = restricted_eigenvalue(K[con.is_u][:, con.is_u], K[~con.is_u][:, con.is_u], G)
+    return value / model.scales.modulus
+
+
 def _bordered(K, c, pin):
     """The condensed tangent, bordered by the mean-pressure pin if any."""
     if not pin:
@@ -390,7 +414,8 @@ def _history_row(model, current, t, dt, info):
             "q": w @ q, "err": stretching_error(case, current.stretching[:, 1], w),
             "gamma": np.mean(current.vertices[top, 0] - x0) / case.geometry.height,
             "dt": dt, "iterations": info["iterations"], "substeps": info["substeps"],
-            "residual": info["residual"], **probes}
+            "residual": info["residual"], **probes,
+            **({"uniqueness": current.uniqueness} if case.diagnostics.uniqueness else {})}
 
 
 def _snapshot(model, current, t):

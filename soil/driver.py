@@ -69,7 +69,7 @@ class _Point:
         seg = self.segment
         D = np.array(seg.strain_rate, dtype=float)
         Ce, N, H, theta_fp = self.material.rates(stress, state, D)
-        C = Ce - np.outer(Ce @ N, N @ Ce) / (N @ Ce @ N + H) if plastic else Ce
+        C = elastoplastic(Ce, N, H) if plastic else Ce
         w = seg.spin
         spin_term = np.array([2 * w * stress[3], -2 * w * stress[3], 0.0,
                               w * (stress[1] - stress[0])])
@@ -93,6 +93,29 @@ class _Point:
     def loading(self, y):
         """Whether the point at y, on the yield surface, loads plastically."""
         return self.yield_event(0, y) > -1e-9 and self.unload_event(0, y) > 0
+
+
+def elastoplastic(Ce, N, H):
+    """Continuum elastoplastic tangent ``Ce - (Ce N)(N Ce) / (N Ce N + H)`` (Voigt, 4 x 4)
+    from :meth:`soil.camclay.CamClay.rates`: Jaumann stress rate = tangent @ D."""
+    return Ce - np.outer(Ce @ N, N @ Ce) / (N @ Ce @ N + H)
+
+
+def tangents(material, raw, segment):
+    """The continuum tangent at every row of a path from :func:`integrate`, (R, 4, 4).
+
+    Rows on the yield surface that load under the segment's stretching get the
+    elastoplastic tangent, the others the elastic one; a loop over the path's rows (a
+    driver path, not a hot path).
+    """
+    point = _Point(material, segment)
+    D = np.asarray(segment.strain_rate, float)
+    out = []
+    for y in raw[["sxx", "syy", "szz", "sxy", "pc", "v"]].to_numpy():
+        Ce, N, H, _ = material.rates(y[:4], {"pc": y[4], "v": y[5]}, D)
+        out.append(elastoplastic(Ce, N, H) if point.loading(np.append(y, np.zeros(4)))
+                   else Ce)
+    return np.array(out)
 
 
 def integrate(material, stress, state, segments, points_per_segment=100, rtol=1e-10):
@@ -222,6 +245,26 @@ def run_test(material, test, strain, points=200):
     raw = integrate(material, stress[0], {k: v[0] for k, v in state.items()}, segments,
                     points_per_segment=max(1, points // len(segments)))
     return path_table(raw, shear=(test == "undrained-simple-shear"))
+
+
+def continuum_path(material, test, strain, points=200):
+    """A named test's raw path (:func:`integrate`) and the continuum tangent at each row.
+
+    Returns
+    -------
+    raw : pandas.DataFrame
+        As :func:`integrate`.
+    tangents : ndarray, shape (R, 4, 4)
+        :func:`tangents` of the rows under the first segment's stretching.
+    """
+    require(strain > 0, f"--strain {strain} must be positive")
+    segments = _program(test, strain)
+    require(len(segments) == 1, f"test {test!r} has {len(segments)} segments; the "
+            "continuum path takes a single-segment test")
+    stress, state = material.initial_state(1)
+    raw = integrate(material, stress[0], {k: v[0] for k, v in state.items()}, segments,
+                    points_per_segment=points)
+    return raw, tangents(material, raw, segments[0])
 
 
 def closed_form_q(clay, p):

@@ -8,6 +8,7 @@ from comparisons.metrics import (axis_profile, mandel_errors, oscillation_index,
                                  terzaghi_errors)
 from efg.solver import solve
 from soil.problems import load_case
+from soil.results import MARKER
 
 
 @pytest.fixture(scope="module")
@@ -75,7 +76,7 @@ def test_soil_column_oscillation_grows_with_the_stability_number():
 
 
 @pytest.mark.parametrize("overrides,word", [
-    (["efg.scale_u=0.6", "efg.cells=squares"], "scale factor"),
+    (["efg.scale_u=0.6", "efg.cells=squares"], "efg.scale_u"),
     (["material.permeability=-1e-6"], "permeability"),
     (["loading.velocity_gradient=[[0.0,0.0],[0.0,-3.0]]", "time.steps=1",
       "time.end=1.0"], "failed after 6 halvings"),
@@ -84,9 +85,10 @@ def test_bad_runs_leave_the_output_folder_untouched(tmp_path, capsys, overrides,
     out = tmp_path / "run"
     out.mkdir()
     (out / "previous.txt").write_text("kept")
+    (out / MARKER).write_text("{}\n")                     # a previous soilwater result
     args = ["run", "unconfined-compression", "--method", "efg", "--out", str(out)]
     status = main(args + sum((["--set", o] for o in overrides), []))
     err = capsys.readouterr().err.strip().splitlines()
     assert status == 2 and len(err) == 1 and word in err[0]
     assert [p.name for p in tmp_path.iterdir()] == ["run"]
-    assert [p.name for p in out.iterdir()] == ["previous.txt"]
+    assert sorted(p.name for p in out.iterdir()) == sorted([MARKER, "previous.txt"])
