@@ -15,7 +15,9 @@ $(STAMP): pyproject.toml
 test: $(STAMP)
 	$(BIN)/python -m pytest
 
+# The report's bifurcation ensemble runs both linear solvers: it adds PARDISO (x86_64).
 report: $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[fast]'
 	$(BIN)/soilwater report
 
 # The benchmark adds the optional PARDISO solver (x86_64; SuperLU elsewhere).

@@ -282,19 +282,22 @@ def figure(table, path):
     plt.close(fig)
 
 
+def cpu():
+    """The CPU model (``model name`` of /proc/cpuinfo, else what platform knows)."""
+    try:
+        with open("/proc/cpuinfo") as fh:
+            return next(line.split(":", 1)[1].strip() for line in fh
+                        if line.startswith("model name"))
+    except (OSError, StopIteration):
+        return platform.processor() or platform.machine()
+
+
 def machine():
     """One line naming the machine, the solver back-end and the main versions."""
     import numba
     import scipy
 
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as fh:
-            cpu = next(line.split(":", 1)[1].strip() for line in fh
-                       if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    return (f"{cpu}, {os.cpu_count()} cores; linear solver {backend()}; Python "
+    return (f"{cpu()}, {os.cpu_count()} cores; linear solver {backend()}; Python "
             f"{platform.python_version()}, NumPy {np.__version__}, SciPy {scipy.__version__}, "
             f"scikit-fem {skfem.__version__}, numba {numba.__version__}")
 

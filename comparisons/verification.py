@@ -15,6 +15,7 @@ from comparisons.metrics import (axis_profile, mandel_errors, moose_errors,
 from comparisons import runner
 from comparisons.peers import moose_terzaghi
 from efg.statics import solve
+from soil.bifurcation import onset
 from soil.driver import run_test
 from soil.errors import SoilwaterError
 from soil.problems import load_case
@@ -83,15 +84,19 @@ PATH_CASES = {"unconfined-compression": "undrained-plane-strain",
 def stress_paths(cases=tuple(PATH_CASES), runs=PATH_RUNS):
     """Each run of each case beside the stress-point driver, per step (paper Figs. 4, 6).
 
+    The unconfined compression runs record the uniqueness indicator
+    (``diagnostics.uniqueness``).
+
     Returns
     -------
     pandas.DataFrame
         Long format: ``case, run, time, strain`` (axial, or shear for simple shear),
-        ``p, q`` (p', q over p'0), ``err`` (paper eq. 1, NaN where undefined) and the
-        driver's ``p_driver, q_driver`` at the same strain.
+        ``p, q`` (p', q over p'0), ``err`` (paper eq. 1, NaN where undefined),
+        ``uniqueness`` (NaN where not recorded) and the driver's ``p_driver, q_driver`` at
+        the same strain.
     """
     settings = list(itertools.product(cases, runs.items()))
-    results = _results([(case, overrides, method)
+    results = _results([(case, overrides + UNIQUENESS.get(case, ()), method)
                         for case, (_, (method, overrides)) in settings])
     frames = []
     for (case, (label, _)), result in zip(settings, results):
@@ -102,19 +107,31 @@ def stress_paths(cases=tuple(PATH_CASES), runs=PATH_RUNS):
             "case": case, "run": label, "time": history.time, "strain": strain,
             "p": history.p / clay.p0, "q": history.q / clay.p0,
             "err": history.err.astype(float),
+            "uniqueness": history.get("uniqueness", np.nan),
             "p_driver": np.interp(strain, driver.eps_a, driver.p) / clay.p0,
             "q_driver": np.interp(strain, driver.eps_a, driver.q) / clay.p0}))
     return pd.concat(frames, ignore_index=True)
 
 
+#: Extra overrides per case of :func:`stress_paths`: the indicator where it is reported.
+UNIQUENESS = {"unconfined-compression": ("diagnostics.uniqueness=true",)}
+
+
 def path_summary(table):
-    """Largest path error (over p'0) and ERR statistics per case and run."""
+    """Path error (over p'0) and ERR per case and run, before the discrete onset of the
+    loss of uniqueness (comparable between methods; the whole run where the indicator
+    stays positive or is not recorded) and over the whole run (branch-dependent past the
+    onset: round-off chooses the branch)."""
     gap = np.maximum(np.abs(table.p - table.p_driver), np.abs(table.q - table.q_driver))
-    return (table.assign(path_error=gap)
-            .groupby(["case", "run"], sort=False)
-            .agg(path_error=("path_error", "max"), err_mean=("err", "mean"),
-                 err_max=("err", "max"), err_final=("err", "last"))
-            .reset_index())
+    rows = []
+    for (case, run), g in table.assign(path_error=gap).groupby(["case", "run"], sort=False):
+        start = onset(g.strain, g.uniqueness) if g.uniqueness.notna().all() else np.nan
+        before = g[g.strain < start] if np.isfinite(start) else g
+        rows.append({"case": case, "run": run, "onset": start,
+                     "path_error_before": before.path_error.max(),
+                     "err_before": before.err.max(), "path_error": g.path_error.max(),
+                     "err_max": g.err.max(), "err_final": g.err.iloc[-1]})
+    return pd.DataFrame(rows)
 
 
 #: Weight combinations of the paper's Table 2 for (u, p_w).
