@@ -30,7 +30,10 @@ from soil.errors import ConvergenceError, InputError
 CONTRACTION = 0.1
 
 
-def _pardiso_available():
+def available(name):
+    """True if the back-end ``name`` (``"pardiso"`` or ``"superlu"``) can be used here."""
+    if name == "superlu":
+        return True
     try:
         import pypardiso  # noqa: F401
     except ImportError:
@@ -44,12 +47,12 @@ def backend():
     if choice not in ("", "pardiso", "superlu"):
         raise InputError(f"SOILWATER_LINEAR_SOLVER={choice!r} is not a solver; use "
                          "'pardiso' or 'superlu'")
-    if choice == "pardiso" and not _pardiso_available():
+    if choice == "pardiso" and not available("pardiso"):
         raise InputError("SOILWATER_LINEAR_SOLVER=pardiso needs pypardiso: "
                          "pip install 'soilwater[fast]' (x86_64 only)")
     if choice:
         return choice
-    return "pardiso" if _pardiso_available() else "superlu"
+    return "pardiso" if available("pardiso") else "superlu"
 
 
 def identity():
