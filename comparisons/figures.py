@@ -266,6 +266,7 @@ def consolidation(terzaghi_table, mandel_table, path, times=(0.1, 0.5, 1.0, 3.0)
 
     Tables from :func:`comparisons.verification.consolidation_histories`.
     """
+    from comparisons.verification import mandel_centre
     from soil.analytical import terzaghi as series
     from soil.problems import load_case
 
@@ -295,8 +296,8 @@ def consolidation(terzaghi_table, mandel_table, path, times=(0.1, 0.5, 1.0, 3.0)
     for k, (run, part) in enumerate(mandel_table.groupby("run", sort=False)):
         right.semilogx(part.time, part.p_centre, ["o", "s", "^"][k % 3], ms=3, mfc="none",
                        label=run)
-    first = mandel_table[mandel_table.run == mandel_table.run.iloc[0]]
-    right.semilogx(first.time, first.p_exact, "k-", lw=2, alpha=0.5, label="closed form")
+    fine = np.geomspace(mandel_table.time.min(), mandel_table.time.max(), 400)
+    right.semilogx(fine, mandel_centre(fine), "k-", lw=2, alpha=0.5, label="closed form")
     right.axhline(1.0, color="k", lw=0.5, ls=":")
     right.set(xlabel="time (s)", ylabel="p$_w$ at the centre / (F / 2a)",
               title="Mandel: the Mandel-Cryer rise above the undrained value")

@@ -29,3 +29,18 @@ def test_a_rerun_reads_the_cache(tmp_path):
     changed = run([Job("soil-column", "efg", ("time.end=100.0", "efg.scale_p=1.4"))],
                   workers=1, cache_dir=tmp_path, progress=False)
     assert not changed[0].cached
+
+
+def test_a_result_of_another_linear_solver_is_never_reused(tmp_path, monkeypatch):
+    """The cache key holds the solver's name and version: the same job under another
+    solver (or another version of it) is run, not read, and its summary names it."""
+    import comparisons.runner as runner
+
+    job = Job("soil-column", "efg", ("time.end=100.0",), linear_solver="superlu")
+    first = run([job], workers=1, cache_dir=tmp_path, progress=False)[0]
+    assert first.result.summary["linear_solver"].startswith("superlu scipy ")
+    assert run([job], workers=1, cache_dir=tmp_path, progress=False)[0].cached
+    key = job.key()
+    monkeypatch.setattr(runner, "identity", lambda: "superlu scipy 0.0-other")
+    assert job.key() != key
+    assert not run([job], workers=1, cache_dir=tmp_path, progress=False)[0].cached
