@@ -93,7 +93,10 @@ def march(case, current, step, row, snapshot, stats, progress=True, desc=""):
     snapshot : callable
         ``snapshot(current, t) -> Snapshot``.
     stats : dict
-        Updated in place: ``newton_iterations``, ``cutbacks``, ``max_residual``.
+        Updated in place: ``newton_iterations``, ``cutbacks``, ``max_residual`` and, when
+        the rows carry the uniqueness indicator (``diagnostics.uniqueness``),
+        ``uniqueness_onset_step``: the first step (from 1) whose indicator is not
+        positive, None if there is none.
 
     Returns
     -------
@@ -113,6 +116,9 @@ def march(case, current, step, row, snapshot, stats, progress=True, desc=""):
     history = pd.DataFrame(rows)
     if "err" in history and history["err"].isna().all():
         history["err"] = None
+    if "uniqueness" in history:
+        lost = np.flatnonzero(history["uniqueness"].to_numpy() <= 0)
+        stats["uniqueness_onset_step"] = int(lost[0]) + 1 if len(lost) else None
     return history, snapshots
 
 

@@ -88,10 +88,12 @@ def test_cam_clay_loses_uniqueness_near_the_continuum_onset(method):
         "time.end=10.0", "time.steps=25", "efg.cells=squares",
         "diagnostics.uniqueness=true"])
     solve = efg_solve if method == "efg" else (lambda c, **k: fem_solve(c, method, **k))
-    h = solve(case, progress=False).history
+    result = solve(case, progress=False)
+    h, step = result.history, result.summary["uniqueness_onset_step"]
     assert h.uniqueness.iloc[0] > h.uniqueness.iloc[3] > 0
     assert (h.uniqueness.iloc[-5:] <= 0).any()
     assert abs(onset(h.eps_a, h.uniqueness) - 0.0798) < 0.04
+    assert h.uniqueness.iloc[step - 1] <= 0 < h.uniqueness.iloc[:step - 1].min()
 
 
 def test_jitter_moves_interior_nodes_only_and_is_reproducible():
