@@ -17,6 +17,7 @@ import multiprocessing
 import os
 import signal
 import sys
+import threading
 from contextlib import contextmanager
 
 from soil.errors import SoilwaterError
@@ -36,7 +37,7 @@ class Interrupted(KeyboardInterrupt):
 
 def main(argv=None):
     """Entry point of the console script; returns the exit status (see the module)."""
-    with interruptible():
+    with interruptible() as received:
         try:
             args = _parser().parse_args(argv)
             status = args.func(args) or 0
@@ -45,15 +46,26 @@ def main(argv=None):
         except SoilwaterError as err:
             return _fail(f"error: {err}", 2)
         except KeyboardInterrupt as err:
-            signum = getattr(err, "signum", signal.SIGINT)
-            return _fail(f"interrupted ({signal.Signals(signum).name}): no half-written "
-                         "output was left", 128 + signum)
+            return _interrupted(getattr(err, "signum", signal.SIGINT))
         except BrokenPipeError:
             # the Python documentation's recipe: no second error at interpreter exit
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
             return BROKEN_PIPE
         except OSError as err:
+            if received:
+                return _interrupted(received[0])
             return _fail(f"error: {os_message(err)}", 2)
+        except Exception:
+            # a signal that landed inside a library callback (numba's compiler, through
+            # ctypes) is swallowed there and resurfaces as that library's own error
+            if received:
+                return _interrupted(received[0])
+            raise
+
+
+def _interrupted(signum):
+    return _fail(f"interrupted ({signal.Signals(signum).name}): no half-written output "
+                 "was left", 128 + signum)
 
 
 def _fail(message, status):
@@ -74,30 +86,50 @@ def os_message(err):
 
 @contextmanager
 def interruptible():
-    """While the block runs, SIGINT and SIGTERM raise :class:`Interrupted` in this process.
+    """While the block runs, SIGINT and SIGTERM raise :class:`Interrupted` in this process;
+    the block gets the list of signals received so far.
 
     The handler first terminates this process's multiprocessing children (the workers of
     a sweep), so that waiting for them does not outlast the signal. A worker forked inside
     the block inherits the handler; there it restores the default action and re-sends the
     signal, so the worker ends quietly, without a traceback. A signal ignored on entry
     (SIGINT of a background job) stays ignored; the previous handlers are restored on exit.
+    Where the signal lands inside a ctypes callback (numba compiling, through llvmlite),
+    Python cannot raise it there: it is not reported as an unraisable exception but sent
+    again 50 ms later, and a library error it caused meanwhile is turned into the
+    interruption by :func:`main`.
     """
-    pid = os.getpid()
+    pid, received = os.getpid(), []
 
     def handler(signum, frame):
         if os.getpid() != pid:
             signal.signal(signum, signal.SIG_DFL)
             os.kill(os.getpid(), signum)
         else:
+            received.append(signum)
             for child in multiprocessing.active_children():
                 child.terminate()
             raise Interrupted(signum)
 
+    def unraisable(info):  # Interrupted inside a ctypes callback: sent again, once out
+        if isinstance(info.exc_value, Interrupted):
+            threading.Timer(0.05, resend, (info.exc_value.signum,)).start()
+        else:
+            default(info)
+
+    def resend(signum):
+        if active:
+            os.kill(pid, signum)
+
     previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)
                 if signal.getsignal(s) is not signal.SIG_IGN}
+    default, sys.unraisablehook = sys.unraisablehook, unraisable
+    active = True
     try:
-        yield
+        yield received
     finally:
+        active = False
+        sys.unraisablehook = default
         for signum, action in previous.items():
             signal.signal(signum, action)
 
@@ -260,5 +292,17 @@ def _report(args):
         print(f"wrote {path}")
 
 
+def entry():
+    """The console script: :func:`main`, then exit. After an interruption the process ends
+    at once (``os._exit``, streams flushed): a signal that landed inside numba's compiler
+    can leave LLVM objects whose finalisers crash the interpreter's shutdown."""
+    status = main()
+    if status in (128 + signal.SIGINT, 128 + signal.SIGTERM):
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(status)
+    sys.exit(status)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    entry()
