@@ -25,7 +25,6 @@ from comparisons.bench import cpu
 from comparisons.metrics import moose_errors, path_error, terzaghi_errors
 from comparisons.peers import moose_terzaghi
 from comparisons.runner import ROOT, Job, run
-from soil.bifurcation import onset
 from soil.driver import run_test
 from soil.linear import identity
 from soil.materials import material_from_spec

@@ -253,7 +253,7 @@ def _path(args):
     from soil.results import write_csv
 
     material = load_material(args.material, model=args.model, ocr=args.ocr)
-    if not hasattr(material, "rates"):
+    if not material.plastic:
         raise SoilwaterError(f"material {args.material!r} is elastic: the driver runs "
                              "Cam-clay (model = original or modified)")
     table = run_test(material, args.test, args.strain, points=args.points)

@@ -268,16 +268,16 @@ def consolidation(terzaghi_table, mandel_table, path, times=(0.1, 0.5, 1.0, 3.0)
     """
     from comparisons.verification import mandel_centre
     from soil.analytical import terzaghi as series
+    from soil.analytical import undrained_pressure
     from soil.problems import load_case
 
     case = load_case("terzaghi")
     material, fluid, height = case.material(), case.fluid, case.geometry.height
-    args = (height, material.K + 4 * material.G / 3, fluid.biot_alpha, fluid.storage,
+    args = (height, material.constrained_modulus(), fluid.biot_alpha, fluid.storage,
             fluid.mobility)
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.6), constrained_layout=True)
     y = np.linspace(0, height, 101)
-    mv = 1 / args[1]
-    p0 = fluid.biot_alpha * mv / (fluid.storage + fluid.biot_alpha**2 * mv)  # unit load
+    p0 = undrained_pressure(1.0, *args[1:4])                                # unit load
     markers = {"EFG (5 x 41 nodes)": "o", "fem-q1q1": "s", "fem-th": "^",
                "MOOSE Q1/Q1 (peer)": "x"}
     for k, t in enumerate(times):

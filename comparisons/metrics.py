@@ -5,6 +5,7 @@ Stresses are compression positive; every metric states its normalisation.
 
 import numpy as np
 
+from soil.analytical import undrained_pressure
 from soil.driver import run_test
 
 
@@ -85,7 +86,7 @@ def terzaghi_errors(result):
     case = result.case
     material, fluid = case.material(), case.fluid
     load = -case.boundary.top.traction[1]
-    modulus = material.K + 4 * material.G / 3
+    modulus = material.constrained_modulus()
     height = case.geometry.height
     probes = [p for p in case.probes if p.name != "p99"]
     z = np.array([p.point[1] for p in probes])
@@ -95,7 +96,7 @@ def terzaghi_errors(result):
     p_exact = np.array([e[0] for e in exact])
     settle_exact = np.array([e[1] for e in exact])
     p_h = h[[f"p_w@{p.name}" for p in probes]].to_numpy(float)
-    p0 = fluid.biot_alpha * load / modulus / (fluid.storage + fluid.biot_alpha**2 / modulus)
+    p0 = undrained_pressure(load, modulus, fluid.biot_alpha, fluid.storage)
     err = np.abs(p_h - p_exact).max(axis=1)
     settle = height * (1 - np.exp(-h.eps_a.to_numpy()))
     late = h.time.to_numpy() >= 0.1
@@ -158,8 +159,8 @@ def moose_errors(result, moose):
     columns = [f"p{k}" for k in range(10)]
     p = h[[f"p_w@{c}" for c in columns]].to_numpy(float) / load
     material, fluid = case.material(), case.fluid
-    modulus = material.K + 4 * material.G / 3
-    p0 = fluid.biot_alpha / modulus / (fluid.storage + fluid.biot_alpha**2 / modulus)
+    p0 = undrained_pressure(1.0, material.constrained_modulus(), fluid.biot_alpha,
+                            fluid.storage)
     late = h.time.to_numpy() >= 0.1
     settle = case.geometry.height * (1 - np.exp(-h.eps_a.to_numpy())) / load
     return {"pressure_after_0.1": float(np.abs(p - moose[columns].to_numpy())[late].max()

@@ -56,10 +56,9 @@ def continuum_onset(case=CASE, strain=0.2, points=400):
     total = effective - effective[:, :1] * np.array([1.0, 1.0, 1.0, 0.0])
     value, angle = ellipticity(spatial_tangent(tangents, in_plane(effective),
                                                in_plane(total)))
-    K, G = clay.moduli(clay.p0, clay.v0)
     p, q = invariants(effective)
     return pd.DataFrame({"strain": -raw.eyy.to_numpy(), "eta_over_M": q / (clay.M * p),
-                         "indicator": value / (K + 4 * G / 3),
+                         "indicator": value / clay.constrained_modulus(),
                          "band_angle": np.minimum(angle, 180.0 - angle)})
 
 

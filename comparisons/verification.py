@@ -15,6 +15,7 @@ from comparisons.metrics import (axis_profile, mandel_errors, moose_errors,
 from comparisons import runner
 from comparisons.peers import moose_terzaghi
 from efg.statics import solve
+from soil.analytical import undrained_pressure
 from soil.bifurcation import onset
 from soil.driver import run_test
 from soil.errors import SoilwaterError
@@ -249,12 +250,9 @@ def _results(specs):
 def stability_number(case):
     """``h^2 / (c_v dt0)`` of a column: h the vertical nodal spacing, c_v = mobility x
     (K + 4G/3) at the initial state, dt0 the first step."""
-    material = case.material()
-    stress, state = material.initial_state(1)
-    K, G = (material.moduli(-stress[0, :3].mean(), state["v"][0])
-            if hasattr(material, "moduli") else (material.K, material.G))
+    modulus = case.material().constrained_modulus()
     dt0 = case.times()[1]
-    return float(case.spacing[1] ** 2 / (case.fluid.mobility * (K + 4 * G / 3) * dt0))
+    return float(case.spacing[1] ** 2 / (case.fluid.mobility * modulus * dt0))
 
 
 def consolidation():
@@ -294,12 +292,10 @@ def column_profiles(runs=COLUMN_RUNS):
         case = result.case
         y, p = axis_profile(result, 1)
         load = -case.boundary.top.traction[1]
-        material, fluid = case.material(), case.fluid
-        stress, state = material.initial_state(1)
-        K, G = material.moduli(-stress[0, :3].mean(), state["v"][0])
+        fluid = case.fluid
         reference, _ = terzaghi(y, case.times()[1], load, case.geometry.height,
-                                K + 4 * G / 3, fluid.biot_alpha, fluid.storage,
-                                fluid.mobility)
+                                case.material().constrained_modulus(), fluid.biot_alpha,
+                                fluid.storage, fluid.mobility)
         frames.append(pd.DataFrame({"run": label, "y": y, "p_w": p / load,
                                     "reference": reference / load}))
     return pd.concat(frames, ignore_index=True)
@@ -367,7 +363,7 @@ def mandel_centre(times, case=None):
 
 def _terzaghi_p0(case):
     """Undrained pore pressure of the Terzaghi column under its load."""
-    material, fluid = case.material(), case.fluid
-    load = -case.boundary.top.traction[1]
-    mv = 1 / (material.K + 4 * material.G / 3)
-    return fluid.biot_alpha * mv * load / (fluid.storage + fluid.biot_alpha**2 * mv)
+    fluid = case.fluid
+    return undrained_pressure(-case.boundary.top.traction[1],
+                              case.material().constrained_modulus(), fluid.biot_alpha,
+                              fluid.storage)

@@ -151,7 +151,7 @@ def _step(model, points, t0, t1, stats):
     case, dt = model.case, t1 - t0
     disc = _discretise(model, points.nodes, np.vstack([points.nodes, points.probes]),
                        stats["timings"])
-    n, M = len(points.nodes), len(disc.w)
+    n = len(points.nodes)
     su = disc.su
     stress_q = su.phi @ points.stress
     state_q = {k: su.phi @ v for k, v in points.state.items()}

@@ -37,8 +37,7 @@ def background(case, nodes, loop, settings):
 
 def penalty_factor(material, case, factor):
     """``factor x M / h``: P-wave modulus of the material over the smallest spacing."""
-    M = material.K + 4 * material.G / 3
-    return factor * M / min(case.spacing)
+    return factor * material.constrained_modulus() / min(case.spacing)
 
 
 def solve(case):
@@ -50,7 +49,7 @@ def solve(case):
         If the material is not elastic.
     """
     material = case.material()
-    if not hasattr(material, "stiffness"):
+    if material.plastic:
         raise InputError(f"case {case.name!r}: static EFG elasticity needs material.model "
                          "= 'elastic'")
     settings, exact = case.efg, case.exact_solution()

@@ -114,7 +114,7 @@ def terzaghi(z, t, load, height, modulus, alpha, storage, mobility, terms=200):
     """
     mv = 1.0 / modulus
     cv = mobility / (storage + alpha**2 * mv)
-    p0 = alpha * mv * load / (storage + alpha**2 * mv)
+    p0 = undrained_pressure(load, modulus, alpha, storage)
     k = np.arange(1, terms + 1)[:, None]
     m = (2 * k - 1) * np.pi / (2 * height)
     decay = np.exp(-(m**2) * cv * t)
@@ -124,6 +124,28 @@ def terzaghi(z, t, load, height, modulus, alpha, storage, mobility, terms=200):
     u0 = load * mv * height * storage / (storage + alpha**2 * mv)
     u_inf = load * mv * height
     return p, u0 + U * (u_inf - u0)
+
+
+def undrained_pressure(load, modulus, alpha, storage):
+    """Pore pressure of a laterally confined layer right after a step load (Terzaghi's
+    initial condition): ``alpha m_v load / (S + alpha^2 m_v)``, ``m_v = 1 / modulus``.
+
+    Parameters
+    ----------
+    load : float
+        Compressive vertical load (> 0) [stress unit].
+    modulus : float
+        Constrained modulus ``K + 4G/3`` of the skeleton.
+    alpha, storage : float
+        Biot coefficient and storage S = 1/M.
+
+    Examples
+    --------
+    >>> undrained_pressure(10.0, 100.0, 1.0, 0.0)
+    10.0
+    """
+    mv = 1.0 / modulus
+    return alpha * mv * load / (storage + alpha**2 * mv)
 
 
 def mandel(x, t, force, a, G, nu, mobility, terms=100):

@@ -112,12 +112,23 @@ class CamClay:
         state = {"pc": np.full(n, self.ocr * self.p0), "v": np.full(n, self.v0)}
         return stress, state
 
-    def moduli(self, p, v):
-        """Bulk and shear moduli ``K = v p'/kappa`` and G at mean stress p' and volume v."""
+    #: Cam-clay yields: it has rates for the stress-point driver.
+    plastic = True
+
+    def moduli(self, p=None, v=None):
+        """Bulk and shear moduli ``K = v p'/kappa`` and G at mean stress p' and volume v
+        (default: the initial p'0 and v0)."""
+        p = self.p0 if p is None else p
+        v = self.v0 if v is None else v
         K = v * p / self.kappa
         if self.G is not None:
             return K, np.full_like(K, self.G)
         return K, 1.5 * (1 - 2 * self.nu) / (1 + self.nu) * K
+
+    def constrained_modulus(self, p=None, v=None):
+        """P-wave (oedometric) modulus ``K + 4G/3`` at p' and v (default: initial)."""
+        K, G = self.moduli(p, v)
+        return K + 4 * G / 3
 
     def hardening(self, v):
         """``theta`` in ``dp'c / p'c = theta d eps_v^p`` (compression positive)."""

@@ -54,9 +54,7 @@ class Scales:
 
     @classmethod
     def of(cls, case, material):
-        stress, state = material.initial_state(1)
-        K, G = (material.moduli(-stress[0, :3].mean(), state["v"][0])
-                if hasattr(material, "moduli") else (material.K, material.G))
+        stress, _ = material.initial_state(1)
         sigma0 = stress[0] - case.fluid.biot_alpha * case.initial_pore_pressure * IDENTITY
         edges = [edge for _, edge in case.boundary.items()]
         tractions = [abs(np.asarray(e.traction, float)).max() for e in edges
@@ -64,7 +62,7 @@ class Scales:
         free = any({"free", "rigid"} & {e.ux, e.uy} for e in edges)
         pin = case.fluid.storage == 0 and not free and not any(e.drained for e in edges)
         return cls(sigma0, max([abs(stress[0]).max(), *tractions, 1e-12]),
-                   float(K + 4 * G / 3), float(min(case.spacing)), pin)
+                   float(material.constrained_modulus()), float(min(case.spacing)), pin)
 
     @property
     def force(self):

@@ -56,6 +56,18 @@ class LinearElastic:
         """Shear modulus."""
         return self.E / (2 * (1 + self.nu))
 
+    #: A linear elastic skeleton has no yield surface (no stress-point driver paths).
+    plastic = False
+
+    def moduli(self, p=None, v=None):
+        """Bulk and shear moduli ``(K, G)``, the same in every state."""
+        return self.K, self.G
+
+    def constrained_modulus(self, p=None, v=None):
+        """P-wave (oedometric) modulus ``K + 4G/3``."""
+        K, G = self.moduli(p, v)
+        return K + 4 * G / 3
+
     @property
     def stiffness(self):
         """Elastic tangent (4, 4) from Voigt strain ``(xx, yy, zz, 2xy)`` to stress."""

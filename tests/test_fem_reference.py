@@ -10,7 +10,7 @@ from comparisons.metrics import moose_errors, overshoot, path_error
 from comparisons.peers import moose_terzaghi
 from comparisons.verification import fem_soil_column
 from fem_reference.solver import solve
-from soil.analytical import mandel, terzaghi
+from soil.analytical import mandel, terzaghi, undrained_pressure
 from soil.errors import InputError
 from soil.problems import load_case
 
@@ -27,10 +27,10 @@ def _terzaghi_run(method, overrides=()):
     top = case.nodes()[:, 1] == case.geometry.height
     settlement = np.array([-s.point_data["u"][top, 1].mean() for s in result.snapshots[1:]])
     fluid, mat = case.fluid, case.material()
-    modulus = mat.K + 4 * mat.G / 3
+    modulus = mat.constrained_modulus()
     exact = [terzaghi(HEIGHTS, t, 1.0, 10.0, modulus, fluid.biot_alpha, fluid.storage,
                       fluid.mobility) for t in h.time]
-    p0 = fluid.biot_alpha / modulus / (fluid.storage + fluid.biot_alpha**2 / modulus)
+    p0 = undrained_pressure(1.0, modulus, fluid.biot_alpha, fluid.storage)
     return (h.time.to_numpy(), p, settlement / LOAD, np.array([e[0] for e in exact]),
             np.array([e[1] for e in exact]), p0)
 
