@@ -32,7 +32,7 @@ import skfem
 from efg.mls import ShapeFunctions
 from efg.quadrature import delaunay_cells
 from soil.linear import backend
-from soil.problems import load_case
+from soil.problems import DEFAULT_SCALE, load_case
 
 SIZES = (1_000, 3_000, 10_000, 30_000, 100_000)
 METHODS = ("efg", "fem-p1p1", "fem-th")
@@ -148,7 +148,7 @@ def best_of(fn, repeat=3):
     return min(times)
 
 
-def shape_functions(sizes=SIZES, weight="quartic", scale=1.3):
+def shape_functions(sizes=SIZES, weight="quartic", scale=DEFAULT_SCALE):
     """MLS values + gradients against ``CellBasis`` construction at the same points.
 
     Returns

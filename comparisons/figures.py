@@ -8,6 +8,7 @@ import numpy as np  # noqa: E402
 
 from soil.driver import closed_form_q, run_test  # noqa: E402
 from soil.materials import material_from_spec  # noqa: E402
+from soil.problems import DEFAULT_SCALE  # noqa: E402
 
 
 def stress_paths_driver(path, preset="table1", strain=0.3):
@@ -108,7 +109,7 @@ def background_cells(path):
     return path
 
 
-def shape_functions(path, scale=1.3):
+def shape_functions(path, scale=DEFAULT_SCALE):
     """Paper Fig. 7: an interior node's MLS shape function and its x-derivative.
 
     phi_I and h dphi_I/dx along the line y = y_I through a centre node of a square grid,

@@ -51,7 +51,11 @@ def segment_edges(initial_nodes, loop, geometry):
     return np.argmin(dist, axis=1)
 
 
-def boundary_points(nodes, loop, edges, order=2):
+#: Gauss points per boundary segment (penalties, tractions, the solver's gaps).
+BOUNDARY_ORDER = 2
+
+
+def boundary_points(nodes, loop, edges, order=BOUNDARY_ORDER):
     """Gauss points of every boundary segment in the current configuration.
 
     Parameters
@@ -61,7 +65,8 @@ def boundary_points(nodes, loop, edges, order=2):
     loop : ndarray of int
         Boundary nodes, counter-clockwise.
     edges : ndarray of int
-        Edge index of each segment (:func:`segment_edges`).
+        Edge index of each segment (:func:`segment_edges`): its position in
+        ``soil.problems.EDGES`` (left, right, bottom, top).
     order : int
         Gauss points per segment.
     """

@@ -33,6 +33,7 @@ from scipy.spatial import cKDTree
 
 from efg.weights import Weight, get_weight, weight_scalar
 from soil.errors import InputError, require
+from soil.problems import DEFAULT_SCALE
 
 RCOND_MIN = 1e-10
 """Smallest accepted reciprocal condition number (1-norm) of a point's scaled moment matrix.
@@ -47,7 +48,6 @@ factor of about 0.77 (2 x 2 Gauss points) or 0.73 (3 x 3) in the square cells of
 """
 
 NEIGHBOURS = 8
-SUGGESTED_SCALE = 1.3
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,7 +92,7 @@ class ShapeFunctions:
         return self.phi.indices
 
     @classmethod
-    def build(cls, nodes, points, weight="quartic", scale=1.3, key="efg.scale_u"):
+    def build(cls, nodes, points, weight="quartic", scale=DEFAULT_SCALE, key="efg.scale_u"):
         """Shape functions and gradients of ``nodes`` at ``points``.
 
         Parameters
@@ -136,7 +136,7 @@ class ShapeFunctions:
         weight = get_weight(weight)
         scale = float(scale)
         require(np.isfinite(scale) and scale > 0, f"scale factor = {scale} must be "
-                f"positive (usually 1.2 to 1.5, e.g. {SUGGESTED_SCALE})")
+                f"positive (usually 1.2 to 1.5, e.g. {DEFAULT_SCALE})")
         support = support_radii(nodes, scale)
         indptr, indices = neighbours(nodes, points, support)
         phi, dx, dy, rcond = _shape_kernel(points, nodes, support, indptr, indices,
@@ -414,7 +414,7 @@ def _require_regular(rcond, points, nodes, indptr, indices, weight, scale, key):
         return
     p = bad[np.argmin(rcond[bad])]
     seen = nodes[indices[indptr[p]:indptr[p + 1]]]
-    better = SUGGESTED_SCALE if scale < SUGGESTED_SCALE else round(scale + 0.2, 2)
+    better = DEFAULT_SCALE if scale < DEFAULT_SCALE else round(scale + 0.2, 2)
     reason, extra = _diagnosis(seen, rcond[p])
     raise InputError(
         f"MLS shape functions: point {p} at ({points[p, 0]:.6g}, {points[p, 1]:.6g}) "

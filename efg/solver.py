@@ -53,18 +53,20 @@ import scipy.sparse as sp
 
 from efg import vci
 from efg.assembly import Pattern, scatter
-from efg.boundary import (boundary_points, conditions, penalty_coefficients,
-                          segment_edges)
+from efg.boundary import (BOUNDARY_ORDER, boundary_points, conditions,
+                          penalty_coefficients, segment_edges)
 from efg.mls import ShapeFunctions
 from efg.statics import background, cauchy_traction
 from soil.bifurcation import restricted_eigenvalue
 from soil.coupling import (MAX_ITERATIONS, TOLERANCE, Scales, axial_strain, march,
                            stretching_error)
 from soil.errors import ConvergenceError
-from soil.linear import factorise, identity, must_refactorise
 from soil.kinematics import (IDENTITY, in_plane, invariants, prescribed_increment,
                              spatial_tangent, strain_increment)
+from soil.linear import factorise, identity, must_refactorise
+from soil.problems import EDGES
 from soil.results import Result, Snapshot
+
 
 @dataclass
 class Points:
@@ -138,7 +140,7 @@ def _initial_points(model):
     case = model.case
     nodes = case.nodes()
     stress, state = model.material.initial_state(len(nodes))
-    n_bp = len(model.loop) * 2
+    n_bp = len(model.loop) * BOUNDARY_ORDER
     return Points(nodes=nodes, stress=stress, state=state,
                   p=np.full(len(nodes), case.initial_pore_pressure),
                   gap=np.zeros((n_bp, 2)), plate=0.0, plate_gap=np.zeros(n_bp),
@@ -491,7 +493,7 @@ def _penalties(model, times):
 def _history_row(model, points, t, dt, info):
     case = model.case
     p, q = invariants(points.stress)
-    top = model.loop[model.edges == 3]
+    top = model.loop[model.edges == EDGES.index("top")]
     probes = {}
     if len(points.probes):
         s = case.efg

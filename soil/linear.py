@@ -28,6 +28,14 @@ from soil.errors import ConvergenceError, InputError
 
 #: A factorisation is kept while each iteration divides the residual by at least 1/this.
 CONTRACTION = 0.1
+#: PARDISO ``iparm`` (MKL's 1-based numbering) of the node-blocked factorisation: own
+#: settings (1), METIS ordering (2), the user's permutation (5), one step of iterative
+#: refinement (8), pivots perturbed by 1e-13 (10), no scaling (11) and no weighted
+#: matching (13).
+NODE_BLOCKED = {1: 1, 2: 2, 5: 1, 8: 1, 10: 13, 11: 0, 13: 0}
+#: PARDISO ``iparm`` of the ordering-only analysis of the node graph: own settings (1),
+#: METIS (2), the permutation returned in ``perm`` (5 = 2), no weighted matching (13).
+NODE_ORDERING = {1: 1, 2: 2, 5: 2, 13: 0}
 
 
 def available(name):
@@ -144,7 +152,7 @@ class _Pardiso:
         self.A.sort_indices()
         self.solver = _solver()
         if groups is not None:
-            for index, value in ((1, 1), (2, 2), (5, 1), (8, 1), (10, 13), (11, 0), (13, 0)):
+            for index, value in NODE_BLOCKED.items():
                 self.solver.set_iparm(index, value)
             self.solver.perm = _grouped_order(self.A, np.asarray(groups, np.int64)) + 1
         if not np.diff(self.A.indptr).all():
@@ -190,7 +198,7 @@ def _grouped_order(A, groups):
     graph = sp.csr_matrix(graph + graph.T + sp.eye(graph.shape[0]))
     graph.sort_indices()
     ordering = _solver()
-    for index, value in ((1, 1), (2, 2), (5, 2), (13, 0)):
+    for index, value in NODE_ORDERING.items():
         ordering.set_iparm(index, value)
     ordering.perm = np.zeros(graph.shape[0], np.int32)
     ordering.set_phase(11)           # analysis only: METIS fills ``perm`` (iparm 5 = 2)

@@ -158,6 +158,9 @@ LAYOUTS = ("grid", "grid+centres")
 SECTIONS = ("geometry", "discretisation", "material", "initial", "boundary", "loading",
             "time", "probes", "exact", "diagnostics", "efg")
 MAX_STEPS = 100_000
+#: Default MLS support scale factor of u and p_w (support = scale x distance to the 8th
+#: nearest node).
+DEFAULT_SCALE = 1.3
 
 _KEYS = {
     "geometry": ("shape", "width", "height"),
@@ -351,9 +354,9 @@ class EFGSettings:
     """
 
     weight_u: str = "quartic"
-    scale_u: float = 1.3
+    scale_u: float = DEFAULT_SCALE
     weight_p: str = "quartic"
-    scale_p: float = 1.3
+    scale_p: float = DEFAULT_SCALE
     cells: str = "delaunay"
     order: int = 2
     penalty: float = 1e6
