@@ -82,8 +82,9 @@ def test_an_elastic_skeleton_keeps_its_uniqueness(method):
 @pytest.mark.parametrize("method", ["efg", "fem-th"])
 def test_cam_clay_loses_uniqueness_near_the_continuum_onset(method):
     """Known bad: the normally consolidated Cam-clay specimen loses it. The indicator is
-    positive and falling in the first steps and not positive by 10 % strain; the onset
-    lies within 4 % strain of the continuum one (7.98 %)."""
+    positive and falling in the first steps, and its first zero (on the homogeneous
+    branch: nothing past it is compared) lies within 4 % strain of the continuum one
+    (7.98 %)."""
     case = load_case("unconfined-compression", [
         "time.end=10.0", "time.steps=25", "efg.cells=squares",
         "diagnostics.uniqueness=true"])
@@ -91,7 +92,6 @@ def test_cam_clay_loses_uniqueness_near_the_continuum_onset(method):
     result = solve(case, progress=False)
     h, step = result.history, result.summary["uniqueness_onset_step"]
     assert h.uniqueness.iloc[0] > h.uniqueness.iloc[3] > 0
-    assert (h.uniqueness.iloc[-5:] <= 0).any()
     assert abs(onset(h.eps_a, h.uniqueness) - 0.0798) < 0.04
     assert h.uniqueness.iloc[step - 1] <= 0 < h.uniqueness.iloc[:step - 1].min()
 
