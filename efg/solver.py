@@ -18,7 +18,8 @@ cells rebuilt there) for the displacement increment ``du`` and ``p_w`` at t_(n+1
 
 Newton's method linearises ``J sigma F^-T``: the material's consistent tangent, the
 rotation of the effective stress by the spin and the change of area and orientation
-(:func:`soil.kinematics.spatial_tangent`); the only approximation is that the spin's
+(the integrand and its tangent are :mod:`soil.weakform`'s, shared with the FEM
+reference); the only approximation is that the spin's
 rotation acts on sigma' at t_(n+1) rather than on the rotated start-of-step stress, a
 difference of the order of the strain increment. The linear solver and the reuse of its
 factorisation within a step are those of :mod:`soil.linear`. A step converges when the
@@ -57,12 +58,12 @@ from efg.boundary import (BOUNDARY_ORDER, boundary_points, conditions,
                           penalty_coefficients, segment_edges)
 from efg.mls import ShapeFunctions
 from efg.statics import background, cauchy_traction
+from soil import weakform
 from soil.bifurcation import restricted_eigenvalue
 from soil.coupling import (MAX_ITERATIONS, TOLERANCE, Scales, axial_strain, march,
                            stretching_error)
 from soil.errors import ConvergenceError
-from soil.kinematics import (IDENTITY, in_plane, invariants, prescribed_increment,
-                             spatial_tangent, strain_increment)
+from soil.kinematics import invariants, prescribed_increment, strain_increment
 from soil.linear import factorise, identity, must_refactorise
 from soil.problems import EDGES
 from soil.results import Result, Snapshot
@@ -182,15 +183,13 @@ def _step(model, points, t0, t1, stats):
         stress, state, tangent = model.material.update(stress_q, state_q, deps, dw)
         stats["timings"]["material_s"] += time.perf_counter() - tic
         p_q = disc.sp.phi @ p
-        total = stress - fluid.biot_alpha * p_q[:, None] * IDENTITY
-        wJ = disc.w * J
+        total = weakform.total_stress(stress, p_q, fluid)
+        grad_p = np.stack([disc.sp.dphi_dx @ p, disc.sp.dphi_dy @ p], 1)
+        r = weakform.residual(total, J, Finv, disc.w, p_q, p_n_q, grad_p, fluid, dt)
 
         # residuals
-        sig = in_plane(total)                                               # (M, 2, 2)
-        P = wJ[:, None, None] * sig @ np.swapaxes(Finv, 1, 2)               # (M, f, i)
         tu, tp = disc.tu, disc.tp
-        R_u = np.concatenate([tu.dphi_dx.T @ P[:, f, 0] + tu.dphi_dy.T @ P[:, f, 1]
-                              for f in range(2)])
+        R_u = np.concatenate([_tested(tu, r[:, f]) for f in range(2)])
         ub = disc.sub.phi @ du.reshape(2, n).T                              # (G, 2)
         gap = points.gap + ub - du_bar
         R_u += np.concatenate([disc.sub.phi.T @ (alpha_u * disc.bp.weights
@@ -201,11 +200,7 @@ def _step(model, points, t0, t1, stats):
         R_u[n:] += disc.sub.phi.T @ (rigid_w * plate_gap)
         R_u -= np.concatenate([disc.sub.phi.T @ (disc.bp.weights * traction[:, f])
                                for f in range(2)])
-        grad_p = np.stack([disc.sp.dphi_dx @ p, disc.sp.dphi_dy @ p], 1)
-        R_p = -(tp.phi.T @ (disc.w * (fluid.biot_alpha * (J - 1)
-                                      + fluid.storage * (p_q - p_n_q)))
-                + dt * fluid.mobility * (tp.dphi_dx.T @ (disc.w * grad_p[:, 0])
-                                         + tp.dphi_dy.T @ (disc.w * grad_p[:, 1])))
+        R_p = _tested(tp, r[:, 2])
         pb = disc.spb.phi @ p
         R_p -= disc.spb.phi.T @ (alpha_p * disc.bp.weights * bc.drained * pb)
         c_mean = tp.phi.T @ disc.w
@@ -232,7 +227,7 @@ def _step(model, points, t0, t1, stats):
 
         if must_refactorise(lu, residual, previous):      # tangent, then factorise it
             tic = time.perf_counter()
-            K = _tangent(model, disc, stress, sig, tangent, wJ, Finv, dt, alpha_u, alpha_p)
+            K = _tangent(model, disc, stress, total, tangent, J, Finv, dt, alpha_u, alpha_p)
             K = _bordered(K, disc, n, rigid_w, c_mean, model.scales.pin_pressure)
             toc = time.perf_counter()
             stats["timings"]["assembly_s"] += toc - tic
@@ -248,24 +243,26 @@ def _step(model, points, t0, t1, stats):
 
     done = _finish(model, points, disc, du, p, plate, gap, plate_gap, dt)
     if case.diagnostics.uniqueness:
-        K = _tangent(model, disc, stress, sig, tangent, wJ, Finv, dt, alpha_u, alpha_p)
+        K = _tangent(model, disc, stress, total, tangent, J, Finv, dt, alpha_u, alpha_p)
         done.uniqueness = _uniqueness(model, disc, K, n)
     return done, iteration, residual
 
 
-def _tangent(model, disc, stress, sig, tangent, wJ, Finv, dt, alpha_u, alpha_p):
+def _tested(shape, r):
+    """``sum_s N_s^T r[:, s]`` over the test functions ``shape`` (slots value, d/dx, d/dy;
+    all-zero slots skipped)."""
+    out = np.zeros(shape.phi.shape[1])
+    for s, N in enumerate((shape.phi, shape.dphi_dx, shape.dphi_dy)):
+        if r[:, s].any():
+            out += N.T @ r[:, s]
+    return out
+
+
+def _tangent(model, disc, stress, total, tangent, J, Finv, dt, alpha_u, alpha_p):
     """The Newton tangent of ``(ux, uy, p_w)`` (fields blocked) at the current iterate:
-    material tangent, rotation and change of area (:func:`spatial_tangent`) pulled back
-    to x_n, coupling, storage, flow and the penalties."""
-    fluid, bc, M = model.case.fluid, disc.bc, len(disc.w)
-    A = spatial_tangent(tangent, in_plane(stress), sig)
-    coeff = np.zeros((M, 3, 3, 3, 3))        # fields (ux, uy, p_w) x (phi, d/dx, d/dy)
-    coeff[:, :2, :, :2, :] = _reference(wJ[:, None, None, None, None] * A, Finv, Finv)
-    coeff[:, :2, 1:, 2, 0] = -fluid.biot_alpha * (wJ[:, None, None]
-                                                 * np.swapaxes(Finv, 1, 2))
-    coeff[:, 2, 0, :2, 1:] = coeff[:, :2, 1:, 2, 0]
-    coeff[:, 2, 0, 2, 0] = -fluid.storage * disc.w
-    coeff[:, 2, 1, 2, 1] = coeff[:, 2, 2, 2, 2] = -dt * fluid.mobility * disc.w
+    :func:`soil.weakform.tangent` in the domain, the penalties on the boundary."""
+    bc = disc.bc
+    coeff = weakform.tangent(tangent, stress, total, J, Finv, disc.w, model.case.fluid, dt)
     pen = np.zeros((len(disc.bp.weights), 3, 3, 3, 3))
     constrained = bc.constrained | np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
     pen[:, :2, :, :2, :] = penalty_coefficients(disc.bp, constrained, alpha_u)
@@ -467,16 +464,6 @@ def _gradient(shape, du, n):
     ux, uy = du[:n], du[n:2 * n]
     return np.stack([np.stack([shape.dphi_dx @ ux, shape.dphi_dy @ ux], 1),
                      np.stack([shape.dphi_dx @ uy, shape.dphi_dy @ uy], 1)], 1)
-
-
-def _reference(A, Finv_a, Finv_b):
-    """Coefficients on current-configuration gradients -> on x_n gradients (slots 1, 2)."""
-    M, fa, _, fb, _ = A.shape
-    right = A.reshape(M, 2 * fa * fb, 2) @ np.swapaxes(Finv_b, 1, 2)    # (m, f k g, j)
-    left = Finv_a[:, None] @ right.reshape(M, fa, 2, 2 * fb)              # (m, f, i, g j)
-    out = np.zeros((M, fa, 3, fb, 3))
-    out[:, :, 1:, :, 1:] = left.reshape(M, fa, 2, fb, 2)
-    return out
 
 
 def _penalties(model, times):

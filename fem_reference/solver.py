@@ -1,6 +1,7 @@
 """Updated-Lagrangian u-p FEM (scikit-fem): the reference for the EFG solver.
 
-The same scheme as ``efg/solver.py`` (design.md section 4), with finite elements. A step
+The same scheme as ``efg/solver.py`` (design.md section 4), with finite elements; the
+integrand and its tangent are :mod:`soil.weakform`'s, shared with the EFG solver. A step
 from t_n to t_(n+1) is solved on the mesh at x_n (bases rebuilt there) for the
 displacement increment ``du`` and ``p_w`` at t_(n+1):
 
@@ -16,7 +17,7 @@ displacement increment ``du`` and ``p_w`` at t_(n+1):
   points, which are the material points (their state needs no remapping).
 
 Newton's method starts from the last step's velocity x dt (``L x`` at the first step) and
-uses :func:`soil.kinematics.spatial_tangent` (material tangent, Jaumann
+uses the exact tangent of :func:`soil.weakform.tangent` (material tangent, Jaumann
 rotation, change of area and orientation), pulled back to x_n gradients. Convergence,
 cut-back and scales are those of :mod:`soil.coupling`, shared with the EFG solver: the
 displacement residual below ``TOLERANCE`` times stress scale x spacing, the continuity
@@ -57,12 +58,12 @@ import scipy.sparse as sp
 
 from fem_reference.assembly import Shapes, block
 from fem_reference.spaces import Space, cell_bases
+from soil import weakform
 from soil.bifurcation import restricted_eigenvalue
 from soil.coupling import (MAX_ITERATIONS, TOLERANCE, Scales, axial_strain, march,
                            stretching_error)
 from soil.errors import ConvergenceError, InputError
-from soil.kinematics import (IDENTITY, in_plane, invariants, prescribed_increment,
-                             spatial_tangent, strain_increment)
+from soil.kinematics import in_plane, invariants, prescribed_increment, strain_increment
 from soil.linear import factorise, identity, must_refactorise
 from soil.results import Result, Snapshot
 
@@ -283,7 +284,7 @@ def _step(model, current, t0, t1, stats):
         stress, state, tangent = model.material.update(current.stress, current.state,
                                                        deps, dw)
         stats["timings"]["material_s"] += time.perf_counter() - tic
-        R, total, wJ = _residual(model, disc, current, x, stress, J, Finv, dt)
+        R, total = _residual(model, disc, current, x, stress, J, Finv, dt)
         R += lam * c_mean
         reduced = con.T.T @ R
         if len(con.plate):
@@ -299,7 +300,7 @@ def _step(model, current, t0, t1, stats):
                                    "iterations")
         tic = time.perf_counter()
         if must_refactorise(lu, residual, previous):
-            K = _tangent(model, disc, stress, total, tangent, wJ, Finv, dt)
+            K = _tangent(model, disc, stress, total, tangent, J, Finv, dt)
             K = _bordered(con.T.T @ K @ con.T, con.T.T @ c_mean, sc.pin_pressure)
             toc = time.perf_counter()
             stats["timings"]["assembly_s"] += toc - tic
@@ -318,54 +319,38 @@ def _step(model, current, t0, t1, stats):
     du = x[:2 * n_u].reshape(2, n_u)[:, :n_v].T
     uniqueness = 0.0
     if case.diagnostics.uniqueness:
-        K = con.T.T @ _tangent(model, disc, stress, total, tangent, wJ, Finv, dt) @ con.T
+        K = con.T.T @ _tangent(model, disc, stress, total, tangent, J, Finv, dt) @ con.T
         uniqueness = _uniqueness(model, disc, K)
     return State(current.vertices + du, stress, state, x[2 * n_u:], dw_u * J,
                  deps / dt, x[:2 * n_u] / dt, uniqueness), iteration, residual
 
 
 def _residual(model, disc, current, x, stress, J, Finv, dt):
-    """Full residual ``[R_u, R_p]``, total stress and ``w J`` at the quadrature points."""
+    """Full residual ``[R_u, R_p]`` and the total stress at the quadrature points
+    (:func:`soil.weakform.residual`, scattered with the element bases)."""
     fluid, n_u = model.case.fluid, model.space.n_u
     E, Q = disc.dx.shape
     p_vals = disc.p.values(x[2 * n_u:]).reshape(E * Q, 3)
     pn_vals = disc.p.values(current.p).reshape(E * Q, 3)
-    total = stress - fluid.biot_alpha * p_vals[:, :1] * IDENTITY
-    wJ = disc.dx.ravel() * J
-    P = wJ[:, None, None] * in_plane(total) @ np.swapaxes(Finv, 1, 2)     # (M, f, i)
-    cu = np.concatenate([np.zeros((E * Q, 2, 1)), P], axis=2)
-    R_u = disc.u.vector(cu.reshape(E, Q, 2, 3)) - disc.external
-    w = disc.dx.ravel()[:, None]
-    cp = np.zeros((E * Q, 3))
-    cp[:, 0] = fluid.biot_alpha * (J - 1) + fluid.storage * (p_vals[:, 0] - pn_vals[:, 0])
-    cp[:, 1:] = (dt * fluid.mobility * p_vals[:, 1:]
-                 + model.beta * (p_vals[:, 1:] - pn_vals[:, 1:]))
-    R_p = -disc.p.vector((w * cp).reshape(E, Q, 1, 3))
-    return np.concatenate([R_u, R_p]), total, wJ
+    total = weakform.total_stress(stress, p_vals[:, 0], fluid)
+    r = weakform.residual(total, J, Finv, disc.dx.ravel(), p_vals[:, 0], pn_vals[:, 0],
+                          p_vals[:, 1:], fluid, dt, model.beta, pn_vals[:, 1:])
+    R_u = disc.u.vector(r[:, :2].reshape(E, Q, 2, 3)) - disc.external
+    R_p = disc.p.vector(r[:, 2:].reshape(E, Q, 1, 3))
+    return np.concatenate([R_u, R_p]), total
 
 
-def _tangent(model, disc, stress, total, tangent, wJ, Finv, dt):
-    """The full Jacobian of :func:`_residual` with respect to ``[du, p]``."""
-    fluid = model.case.fluid
+def _tangent(model, disc, stress, total, tangent, J, Finv, dt):
+    """The full Jacobian of :func:`_residual` with respect to ``[du, p]``
+    (:func:`soil.weakform.tangent`, assembled block by block)."""
     E, Q = disc.dx.shape
-    M = E * Q
-    A = spatial_tangent(tangent, in_plane(stress), in_plane(total))
-    uu = np.zeros((M, 2, 3, 2, 3))
-    uu[:, :, 1:, :, 1:] = np.einsum("mik,mfkgl,mjl->mfigj", Finv,
-                                    wJ[:, None, None, None, None] * A, Finv)
-    up = np.zeros((M, 2, 3, 1, 3))
-    up[:, :, 1:, 0, 0] = -fluid.biot_alpha * wJ[:, None, None] * np.swapaxes(Finv, 1, 2)
-    pu = np.zeros((M, 1, 3, 2, 3))
-    pu[:, 0, 0, :, 1:] = up[:, :, 1:, 0, 0]
-    pp = np.zeros((M, 1, 3, 1, 3))
-    w = disc.dx.ravel()
-    pp[:, 0, 0, 0, 0] = -fluid.storage * w
-    pp[:, 0, 1, 0, 1] = pp[:, 0, 2, 0, 2] = -(dt * fluid.mobility + model.beta) * w
-    shape = (E, Q)
-    return sp.bmat([[block(disc.u, disc.u, uu.reshape(*shape, 2, 3, 2, 3)),
-                     block(disc.u, disc.p, up.reshape(*shape, 2, 3, 1, 3))],
-                    [block(disc.p, disc.u, pu.reshape(*shape, 1, 3, 2, 3)),
-                     block(disc.p, disc.p, pp.reshape(*shape, 1, 3, 1, 3))]], format="csr")
+    c = weakform.tangent(tangent, stress, total, J, Finv, disc.dx.ravel(), model.case.fluid,
+                         dt, model.beta).reshape(E, Q, 3, 3, 3, 3)
+    u, p = slice(0, 2), slice(2, 3)
+    return sp.bmat([[block(disc.u, disc.u, c[:, :, u, :, u]),
+                     block(disc.u, disc.p, c[:, :, u, :, p])],
+                    [block(disc.p, disc.u, c[:, :, p, :, u]),
+                     block(disc.p, disc.p, c[:, :, p, :, p])]], format="csr")
 
 
 def _uniqueness(model, disc, K):

@@ -1,0 +1,89 @@
+"""The coupled u-p weak form at integration points, the one home of its integrand.
+
+Both solvers discretise the same two equations on the start-of-step configuration x_n
+(updated Lagrangian, backward Euler; design.md section 4), for the displacement increment
+``du`` (``F = I + grad_n(du)``, ``J = det F``) and the pore pressure ``p`` at t_(n+1):
+
+* momentum, ``int grad_n(v) : J sigma F^-T dOmega_n`` (minus the external work), with
+  ``sigma = sigma' - alpha p I`` (tension positive, p compression positive);
+* continuity, ``-int q [alpha (J - 1) + S (p - p_n)] dOmega_n - int grad(q) . [dt (k /
+  gamma_w) grad(p) + beta grad(p - p_n)] dOmega_n`` (Darcy flux ``-(k/gamma_w) grad p``;
+  ``beta`` the optional pressure stabilisation of :mod:`fem_reference.solver`).
+
+A solver supplies test and trial functions and scatters the coefficients returned here.
+They are per integration point, quadrature weight included, in the layout both
+assemblies use: fields ``(ux, uy, p)`` and slots ``(value, d/dx, d/dy)`` on x_n.
+``residual`` gives ``r[m, f, s]``: the residual of a test function N of field f is
+``sum_m sum_s N_s(x_m) r[m, f, s]``. ``tangent`` gives ``c[m, f, s, g, t]``, its exact
+linearisation in the trial field g, slot t.
+"""
+
+import numpy as np
+
+from soil.kinematics import IDENTITY, in_plane, spatial_tangent
+
+
+def total_stress(effective, p, fluid):
+    """``sigma' - alpha p I`` per point, (M, 4) (tension positive; p compression positive)."""
+    return effective - fluid.biot_alpha * np.asarray(p)[:, None] * IDENTITY
+
+
+def residual(total, J, Finv, w, p, p_n, grad_p, fluid, dt, beta=0.0, grad_p_n=None):
+    """Residual coefficients ``r[m, f, s]``, (M, 3, 3).
+
+    Parameters
+    ----------
+    total : ndarray, shape (M, 4)
+        Total Cauchy stress at t_(n+1) (:func:`total_stress`).
+    J, Finv : ndarray, shapes (M,) and (M, 2, 2)
+        ``det F`` and ``F^-1`` of the increment.
+    w : ndarray, shape (M,)
+        Quadrature weights on x_n [m2].
+    p, p_n : ndarray, shape (M,)
+        Pore pressure at t_(n+1) and t_n [kPa].
+    grad_p : ndarray, shape (M, 2)
+        Gradient of p on x_n [kPa/m]; ``grad_p_n`` that of p_n (needed when beta > 0).
+    fluid : Fluid
+        Biot alpha, storage S [1/kPa], mobility k/gamma_w [m2/(kPa s)].
+    dt : float
+        Time step [s].
+    beta : float
+        Pressure stabilisation [m2/kPa] (0: none).
+    """
+    r = np.zeros((len(w), 3, 3))
+    r[:, :2, 1:] = (w * J)[:, None, None] * in_plane(total) @ np.swapaxes(Finv, 1, 2)
+    r[:, 2, 0] = -w * (fluid.biot_alpha * (J - 1) + fluid.storage * (p - p_n))
+    flux = dt * fluid.mobility * grad_p
+    if beta:
+        flux = flux + beta * (grad_p - grad_p_n)
+    r[:, 2, 1:] = -w[:, None] * flux
+    return r
+
+
+def tangent(C, effective, total, J, Finv, w, fluid, dt, beta=0.0):
+    """Tangent coefficients ``c[m, f, s, g, t]``, (M, 3, 3, 3, 3).
+
+    The momentum block is :func:`soil.kinematics.spatial_tangent` (material tangent C,
+    Jaumann rotation of sigma', change of area and orientation) pulled back to x_n
+    gradients; the coupling ``-alpha J F^-T``; storage ``-S`` and flow ``-(dt k/gamma_w +
+    beta)``. Arguments as in :func:`residual`, with C the material's consistent tangent
+    (M, 4, 4) and ``effective`` the effective stress (M, 4).
+    """
+    wJ = w * J
+    A = spatial_tangent(C, in_plane(effective), in_plane(total))
+    c = np.zeros((len(w), 3, 3, 3, 3))
+    c[:, :2, 1:, :2, 1:] = _pulled_back(wJ[:, None, None, None, None] * A, Finv)
+    c[:, :2, 1:, 2, 0] = -fluid.biot_alpha * wJ[:, None, None] * np.swapaxes(Finv, 1, 2)
+    c[:, 2, 0, :2, 1:] = c[:, :2, 1:, 2, 0]
+    c[:, 2, 0, 2, 0] = -fluid.storage * w
+    c[:, 2, 1, 2, 1] = c[:, 2, 2, 2, 2] = -(dt * fluid.mobility + beta) * w
+    return c
+
+
+def _pulled_back(A, Finv):
+    """``A[m, f, k, g, l]`` on current gradients -> on x_n gradients: ``Finv[m, i, k]
+    A[m, f, k, g, l] Finv[m, j, l]`` as batched matrix products."""
+    M = len(A)
+    right = A.reshape(M, 8, 2) @ np.swapaxes(Finv, 1, 2)               # (m, f k g, j)
+    left = Finv[:, None] @ right.reshape(M, 2, 2, 4)                   # (m, f, i, g j)
+    return left.reshape(M, 2, 2, 2, 2)
