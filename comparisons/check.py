@@ -58,7 +58,8 @@ def unconfined_err():
     frames = []
     for (method, option), result in zip(runs, outcomes):
         h, p0 = result.history, result.case.material().p0
-        after = np.cumsum(h.uniqueness.to_numpy() <= 0) > 0
+        after = np.arange(1, len(h) + 1) >= (result.summary["uniqueness_onset_step"]
+                                             or np.inf)
         frames.append(pd.DataFrame({"run": f"{method} {option}".strip(), "step": h.index,
                                     "regime": np.where(after, "after", "before"),
                                     "eps_a": h.eps_a, "p": h.p / p0, "q": h.q / p0,

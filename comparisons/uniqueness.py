@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from comparisons import runner
-from comparisons.verification import PATH_RUNS
+from comparisons.verification import PATH_RUNS, UNIQUENESS
 from soil.bifurcation import ellipticity, onset
 from soil.driver import continuum_path
 from soil.errors import SoilwaterError
@@ -99,9 +99,11 @@ def ensemble(runs=PATH_RUNS, jitters=JITTERS, linear_solvers=None):
 
 
 def _perturbation(jitter):
-    """Overrides of a member: the indicator on the built-in nodes, else jittered nodes."""
+    """Overrides of a member: on the built-in nodes those of the report's own runs
+    (:data:`comparisons.verification.UNIQUENESS`, so they share the cache), else jittered
+    nodes."""
     if jitter == 0:
-        return ("diagnostics.uniqueness=true",)
+        return UNIQUENESS[CASE]
     return (f"discretisation.jitter={jitter!r}",)
 
 

@@ -128,29 +128,22 @@ def ellipticity(A, samples=180):
     """
     A = np.asarray(A, float)
     angles = np.linspace(0.0, np.pi, samples, endpoint=False)
-    start = angles[_quadratic(A, angles).argmin(1)]
+    start = angles[_quadratic(A, np.broadcast_to(angles, (len(A), samples))).argmin(1)]
     lo, hi = start - np.pi / samples, start + np.pi / samples
     ratio = (np.sqrt(5) - 1) / 2
     for _ in range(60):               # golden section on every point at once: 1e-13 rad
         a, b = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
-        left = _along(A, a) < _along(A, b)
+        left = (_quadratic(A, a[:, None]) < _quadratic(A, b[:, None]))[:, 0]
         hi, lo = np.where(left, b, hi), np.where(left, lo, a)
     best = (lo + hi) / 2
-    return _along(A, best), np.degrees(best) % 180.0
-
-
-def _along(A, angle):
-    """``t.Q.t`` of each point at its own angle, (P,)."""
-    n = np.stack([np.cos(angle), np.sin(angle)], 1)
-    t = np.stack([-np.sin(angle), np.cos(angle)], 1)
-    return np.einsum("pf,pk,pfkgl,pg,pl->p", t, n, A, t, n)
+    return _quadratic(A, best[:, None])[:, 0], np.degrees(best) % 180.0
 
 
 def _quadratic(A, angles):
-    """``t_f n_k A_fkgl t_g n_l`` for every point and angle, (P, len(angles))."""
-    n = np.stack([np.cos(angles), np.sin(angles)], 1)
-    t = np.stack([-np.sin(angles), np.cos(angles)], 1)
-    return np.einsum("af,ak,pfkgl,ag,al->pa", t, n, A, t, n)
+    """``t_f n_k A_fkgl t_g n_l`` of each point p at its angles ``angles[p]``, (P, K)."""
+    n = np.stack([np.cos(angles), np.sin(angles)], -1)
+    t = np.stack([-np.sin(angles), np.cos(angles)], -1)
+    return np.einsum("paf,pak,pfkgl,pag,pal->pa", t, n, A, t, n)
 
 
 def onset(strain, indicator):

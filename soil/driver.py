@@ -239,12 +239,19 @@ def run_test(material, test, strain, points=200):
     >>> list(table.columns)
     ['step', 'eps_a', 'eps_v', 'p', 'q', 'pc']
     """
+    raw, _ = _integrated(material, test, strain, points)
+    return path_table(raw, shear=(test == "undrained-simple-shear"))
+
+
+def _integrated(material, test, strain, points):
+    """A named test from the material's initial state: the raw path of :func:`integrate`
+    (``points`` rows spread over the segments) and the segments."""
     require(strain > 0, f"--strain {strain} must be positive")
     segments = _program(test, strain)
     stress, state = material.initial_state(1)
     raw = integrate(material, stress[0], {k: v[0] for k, v in state.items()}, segments,
                     points_per_segment=max(1, points // len(segments)))
-    return path_table(raw, shear=(test == "undrained-simple-shear"))
+    return raw, segments
 
 
 def continuum_path(material, test, strain, points=200):
@@ -257,13 +264,9 @@ def continuum_path(material, test, strain, points=200):
     tangents : ndarray, shape (R, 4, 4)
         :func:`tangents` of the rows under the first segment's stretching.
     """
-    require(strain > 0, f"--strain {strain} must be positive")
-    segments = _program(test, strain)
+    raw, segments = _integrated(material, test, strain, points)
     require(len(segments) == 1, f"test {test!r} has {len(segments)} segments; the "
             "continuum path takes a single-segment test")
-    stress, state = material.initial_state(1)
-    raw = integrate(material, stress[0], {k: v[0] for k, v in state.items()}, segments,
-                    points_per_segment=points)
     return raw, tangents(material, raw, segments[0])
 
 

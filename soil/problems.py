@@ -916,10 +916,10 @@ def _efg(table):
         weight_form(getattr(settings, f"weight_{field}"), f"efg.weight_{field}")
         require(scale >= SCALES[0], f"{key} = {scale:g} must be >= {SCALES[0]:g} (each "
                 "node's support must reach its 8th nearest node): increase the scale "
-                f"factor, e.g. to {defaults.scale_u:g}")
+                f"factor, e.g. to {DEFAULT_SCALE:g}")
         require(scale <= SCALES[1], f"{key} = {scale:g} must be <= {SCALES[1]:g} (beyond, "
                 "the MLS moment matrices approach singularity): use 1.2 to 2, e.g. "
-                f"{defaults.scale_u:g}")
+                f"{DEFAULT_SCALE:g}")
     require(settings.penalty > 0, f"efg.penalty = {settings.penalty:g} must be positive")
     return settings
 
