@@ -32,7 +32,8 @@ import skfem
 from efg.mls import ShapeFunctions
 from efg.quadrature import delaunay_cells
 from soil.linear import backend
-from soil.problems import DEFAULT_SCALE, load_case
+from soil.problems import load_case
+from soil.settings import DEFAULT_SCALE
 
 SIZES = (1_000, 3_000, 10_000, 30_000, 100_000)
 METHODS = ("efg", "fem-p1p1", "fem-th")

@@ -8,7 +8,7 @@ import numpy as np  # noqa: E402
 
 from soil.driver import closed_form_q, run_test  # noqa: E402
 from soil.materials import material_from_spec  # noqa: E402
-from soil.problems import DEFAULT_SCALE  # noqa: E402
+from soil.settings import DEFAULT_SCALE  # noqa: E402
 
 
 def stress_paths_driver(path, preset="table1", strain=0.3):

@@ -28,7 +28,7 @@ class BoundaryPoints:
     weights : ndarray, shape (G,)
         Line weights [m per unit thickness].
     edge : ndarray, shape (G,)
-        Index into ``soil.problems.EDGES`` of each point's edge.
+        Index into ``soil.case.EDGES`` of each point's edge.
     normal : ndarray, shape (G, 2)
         Unit outward normals.
     """
@@ -66,7 +66,7 @@ def boundary_points(nodes, loop, edges, order=BOUNDARY_ORDER):
         Boundary nodes, counter-clockwise.
     edges : ndarray of int
         Edge index of each segment (:func:`segment_edges`): its position in
-        ``soil.problems.EDGES`` (left, right, bottom, top).
+        ``soil.case.EDGES`` (left, right, bottom, top).
     order : int
         Gauss points per segment.
     """

@@ -1,6 +1,6 @@
 """Moving-least-squares shape functions and their gradients, batched over points.
 
-Linear basis, shifted to the evaluation point and scaled (design.md section 5; Belytschko,
+Linear basis, shifted to the evaluation point and scaled (Belytschko,
 Lu and Gu 1994, "Element-free Galerkin methods", IJNME 37)::
 
     q_J = [1, (x_J - x)/h, (y_J - y)/h],   A = sum_J w_J q_J q_J^T,   B_J = w_J q_J
@@ -31,9 +31,9 @@ import numpy as np
 from scipy.sparse import csr_array
 from scipy.spatial import cKDTree
 
-from efg.weights import Weight, get_weight, weight_scalar
+from efg.weights import weight_scalar
 from soil.errors import InputError, require
-from soil.problems import DEFAULT_SCALE
+from soil.settings import DEFAULT_SCALE, Weight
 
 RCOND_MIN = 1e-10
 """Smallest accepted reciprocal condition number (1-norm) of a point's scaled moment matrix.
@@ -102,7 +102,7 @@ class ShapeFunctions:
         points : array_like, shape (n_points, 2)
             Evaluation points [m].
         weight : str or Weight
-            A name read by :func:`efg.weights.get_weight`: ``quartic`` (``Q``), ``cubic``
+            A name read by :meth:`soil.settings.Weight.parse`: ``quartic`` (``Q``), ``cubic``
             or ``exp:C`` (``E-A`` = ``exp:0.5``, ``E-B`` = ``exp:0.25``).
         scale : float
             Scale factor of the supports, ``d_mJ = scale x d_J`` (usually 1.2 to 1.5).
@@ -133,7 +133,7 @@ class ShapeFunctions:
         require(len(nodes) > NEIGHBOURS, f"MLS shape functions need at least "
                 f"{NEIGHBOURS + 1} nodes (the support radius is the distance to the "
                 f"{NEIGHBOURS}th nearest node); got {len(nodes)}")
-        weight = get_weight(weight)
+        weight = Weight.parse(weight)
         scale = float(scale)
         require(np.isfinite(scale) and scale > 0, f"scale factor = {scale} must be "
                 f"positive (usually 1.2 to 1.5, e.g. {DEFAULT_SCALE})")

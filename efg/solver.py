@@ -65,7 +65,7 @@ from soil.coupling import (MAX_ITERATIONS, TOLERANCE, Scales, axial_strain, marc
 from soil.errors import ConvergenceError
 from soil.kinematics import invariants, prescribed_increment, strain_increment
 from soil.linear import factorise, identity, must_refactorise
-from soil.problems import EDGES
+from soil.case import EDGES
 from soil.results import Result, Snapshot
 
 

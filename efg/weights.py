@@ -1,4 +1,4 @@
-"""MLS weight functions of the normalised distance ``r = d / d_mI`` (design.md section 5).
+"""MLS weight functions of the normalised distance ``r = d / d_mI``: numba evaluation.
 
 Each weight peaks at ``r = 0``, decreases to 0 at ``r = 1`` and is zero for ``r > 1``:
 
@@ -9,27 +9,22 @@ Each weight peaks at ``r = 0``, decreases to 0 at ``r = 1`` and is zero for ``r 
   ``(exp(-(r/c)^2) - exp(-(1/c)^2)) / (1 - exp(-(1/c)^2))``; ``E-A`` is ``c = 0.5`` and
   ``E-B`` is ``c = 0.25`` (sharper, nearly interpolating). It is only C0 at ``r = 1``.
 
-A case names a weight by a string read by :func:`get_weight`. The grammar of the names
-(the families, the aliases ``Q``, ``E-A``, ``E-B`` and the range of ``c``) is
-:func:`soil.problems.weight_form`, shared with the load-time validation of a case, which
-must not import ``efg``. A :class:`Weight` is a small value object (an integer kind code
-and the parameter ``c``); numba kernels call :func:`weight_scalar` with those two numbers,
-and calling the object evaluates ``w`` and ``dw/dr`` on whole arrays. numba's on-disk
-cache does not track calls across files: after editing this module, delete the ``*.nbi``
-and ``*.nbc`` files in ``efg/__pycache__`` so that the kernels of :mod:`efg.mls` are
-compiled again.
+A case names a weight by a string, read once at load time into a
+:class:`soil.settings.Weight` (the names' grammar, the aliases ``Q``, ``E-A``, ``E-B``,
+the range of ``c`` and the integer kind codes live in :mod:`soil.settings`, shared with
+the load-time validation of a case, which must not import ``efg``). Numba kernels call :func:`weight_scalar` with the Weight's kind
+code and ``c``, and :func:`evaluate` gives ``w`` and ``dw/dr`` on whole arrays. numba's
+on-disk cache does not track calls across files: after editing this module, delete the
+``*.nbi`` and ``*.nbc`` files in ``efg/__pycache__`` so that the kernels of
+:mod:`efg.mls` are compiled again.
 """
 
 import math
-from dataclasses import dataclass
 
 import numba
 import numpy as np
 
-from soil.problems import weight_form
-
-QUARTIC, CUBIC, EXPONENTIAL = 0, 1, 2
-_KINDS = {"quartic": QUARTIC, "cubic": CUBIC, "exp": EXPONENTIAL}
+from soil.settings import CUBIC, QUARTIC, Weight
 
 
 @numba.njit(cache=True)
@@ -72,55 +67,28 @@ def _evaluate(kind, c, r):
     return w, dw
 
 
-@dataclass(frozen=True)
-class Weight:
-    """A weight function: canonical ``name``, integer ``kind`` code and parameter ``c``.
-
-    Calling it on ``r`` (any shape, dimensionless, >= 0) returns ``(w, dw_dr)`` of that
-    shape.
-
-    Examples
-    --------
-    >>> w, dw = get_weight("Q")([0.5, 1.5])
-    >>> w.tolist(), dw.tolist()
-    ([0.3125, 0.0], [-1.5, 0.0])
-    """
-
-    name: str
-    kind: int
-    c: float = 0.0
-
-    def __call__(self, r):
-        r = np.asarray(r, dtype=float)
-        w, dw = _evaluate(self.kind, self.c, r.ravel())
-        return w.reshape(r.shape), dw.reshape(r.shape)
-
-    def __str__(self):
-        return self.name
-
-
-def get_weight(name):
-    """The :class:`Weight` a case names.
+def evaluate(weight, r):
+    """Weight and its derivative on an array of normalised distances.
 
     Parameters
     ----------
-    name : str or Weight
-        ``quartic``, ``cubic`` or ``exp:C``, case-insensitive; aliases ``Q``, ``E-A``
-        (``exp:0.5``) and ``E-B`` (``exp:0.25``); see :func:`soil.problems.weight_form`.
-        A Weight passes through.
+    weight : str or Weight
+        The weight function, or a name read by :meth:`soil.settings.Weight.parse`.
+    r : array_like
+        Normalised distances ``d / d_mI`` (any shape, dimensionless, >= 0).
 
-    Raises
-    ------
-    InputError
-        For any other name, listing the valid forms.
+    Returns
+    -------
+    w, dw_dr : ndarray
+        Of the shape of ``r``; zero for ``r >= 1``.
 
     Examples
     --------
-    >>> get_weight("E-B")
-    Weight(name='exp:0.25', kind=2, c=0.25)
+    >>> w, dw = evaluate("Q", [0.5, 1.5])
+    >>> w.tolist(), dw.tolist()
+    ([0.3125, 0.0], [-1.5, 0.0])
     """
-    if isinstance(name, Weight):
-        return name
-    family, c = weight_form(name)
-    kind = _KINDS[family]
-    return Weight(f"exp:{c:g}" if kind == EXPONENTIAL else family, kind, c)
+    weight = Weight.parse(weight)
+    r = np.asarray(r, dtype=float)
+    w, dw = _evaluate(weight.kind, weight.c, r.ravel())
+    return w.reshape(r.shape), dw.reshape(r.shape)

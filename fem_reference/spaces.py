@@ -1,6 +1,6 @@
 """Meshes, element pairs and boundary DOF sets of the FEM reference (scikit-fem).
 
-The mesh vertices are the case's nodes (:meth:`soil.problems.Case.nodes`, same order), so
+The mesh vertices are the case's nodes (:meth:`soil.case.Case.nodes`, same order), so
 a FEM run and an EFG run of a case share their node set; second-order elements add
 scikit-fem's midside (and, for Q2, centre) DOFs. Triangles: two per grid cell for the
 ``grid`` layout (diagonal from lower left to upper right), Delaunay triangles
@@ -21,7 +21,7 @@ from skfem import (CellBasis, ElementQuad1, ElementQuad2, ElementTriP1, ElementT
                    FacetBasis, MeshQuad, MeshTri)
 
 from soil.errors import InputError
-from soil.problems import EDGES
+from soil.case import EDGES
 
 
 @dataclass(frozen=True)

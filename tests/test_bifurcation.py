@@ -11,7 +11,8 @@ from efg.solver import solve as efg_solve
 from fem_reference.solver import solve as fem_solve
 from soil.bifurcation import DENSE_LIMIT, ellipticity, onset, restricted_eigenvalue
 from soil.errors import InputError
-from soil.problems import case_from_dict, load_case
+from soil.problems import load_case
+from soil.validation import case_from_dict
 
 
 def test_restricted_eigenvalue_matches_an_independent_null_space():

@@ -8,7 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from efg.mls import RCOND_MIN, ShapeFunctions, neighbours, support_radii
-from efg.weights import get_weight
+from efg.weights import evaluate
+from soil.settings import Weight
 from soil.errors import InputError
 from soil.problems import load_case
 
@@ -57,7 +58,7 @@ def layouts(draw):
 # -- weights -------------------------------------------------------------------------------
 @pytest.mark.parametrize("name", WEIGHTS)
 def test_weight_is_one_at_zero_and_vanishes_beyond_one(name):
-    w, dw = get_weight(name)(np.array([0.0, 1.0, 1.5]))
+    w, dw = evaluate(Weight.parse(name), np.array([0.0, 1.0, 1.5]))
     top = 2 / 3 if name == "cubic" else 1.0
     np.testing.assert_allclose(w, [top, 0.0, 0.0], atol=1e-15)
     np.testing.assert_allclose(dw[[0, 2]], 0.0, atol=0)
@@ -65,19 +66,19 @@ def test_weight_is_one_at_zero_and_vanishes_beyond_one(name):
 
 @pytest.mark.parametrize("name", WEIGHTS)
 def test_weight_derivative_matches_finite_differences(name):
-    weight, r, eps = get_weight(name), np.linspace(0.01, 0.99, 97), 1e-6
-    fd = (weight(r + eps)[0] - weight(r - eps)[0]) / (2 * eps)
-    np.testing.assert_allclose(weight(r)[1], fd, atol=1e-8)
+    weight, r, eps = Weight.parse(name), np.linspace(0.01, 0.99, 97), 1e-6
+    fd = (evaluate(weight, r + eps)[0] - evaluate(weight, r - eps)[0]) / (2 * eps)
+    np.testing.assert_allclose(evaluate(weight, r)[1], fd, atol=1e-8)
 
 
 def test_weight_names_and_aliases():
-    assert get_weight("Q") == get_weight("quartic")
-    assert get_weight("E-A") == get_weight("exp:0.5")
-    assert get_weight(" e-b ").name == "exp:0.25"
-    assert str(get_weight("exp:0.3")) == "exp:0.3"
+    assert Weight.parse("Q") == Weight.parse("quartic")
+    assert Weight.parse("E-A") == Weight.parse("exp:0.5")
+    assert Weight.parse(" e-b ").name == "exp:0.25"
+    assert str(Weight.parse("exp:0.3")) == "exp:0.3"
     for bad in ("gauss", "exp:", "exp:0", "exp:-1", "exp:abc"):
         with pytest.raises(InputError, match="quartic .*cubic.*exp:C"):
-            get_weight(bad)
+            Weight.parse(bad)
 
 
 # -- consistency (hypothesis) --------------------------------------------------------------

@@ -1,7 +1,8 @@
-"""Case definitions: TOML twins, nodes, time levels, overrides and input errors."""
+"""Case definitions: built-in case files, nodes, time levels, overrides and input errors."""
 
 import json
 import pickle
+from importlib.resources import files
 from pathlib import Path
 
 import numpy as np
@@ -9,25 +10,32 @@ import pytest
 
 from efg.boundary import boundary_points, segment_edges
 from efg.mls import ShapeFunctions
-from efg.statics import background
-from efg.weights import get_weight
+from efg.quadrature import background
 from soil.camclay import CamClay
 from soil.elastic import LinearElastic
 from soil.errors import InputError
-from soil.problems import (EDGES, MAX_TRIANGLE_ORDER, SCALES, builtin_cases, case_from_dict,
-                           load_case)
+from soil.case import EDGES
+from soil.problems import builtin_cases, load_case
+from soil.schema import MAX_TRIANGLE_ORDER, SCALES
+from soil.settings import Weight
+from soil.validation import case_from_dict
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
 BUILTIN = builtin_cases()
 
 
+def test_builtins_are_the_case_files_by_name():
+    assert Path(str(files("cases"))).resolve() == CASES
+    assert list(BUILTIN) == sorted(p.stem for p in CASES.glob("*.toml")) == [
+        "cantilever", "mandel", "patch-test", "simple-shear", "soil-column", "terzaghi",
+        "unconfined-compression"]
+
+
 @pytest.mark.parametrize("name", list(BUILTIN))
-def test_toml_twin_equals_builtin(name):
-    assert load_case(CASES / f"{name}.toml") == BUILTIN[name]
-
-
-def test_every_twin_is_a_builtin():
-    assert sorted(p.stem for p in CASES.glob("*.toml")) == sorted(BUILTIN)
+def test_builtin_is_its_file_and_named_by_its_stem(name):
+    path = CASES / f"{name}.toml"
+    assert BUILTIN[name].name == name
+    assert load_case(name) == load_case(path) == load_case(str(path)) == BUILTIN[name]
 
 
 @pytest.mark.parametrize("name", list(BUILTIN))
@@ -254,6 +262,18 @@ def test_override_of_one_edge_leaves_the_others():
     assert (case.boundary.left.uy, case.boundary.right.uy) == ("fixed", "free")
 
 
+def test_weights_are_parsed_at_load_and_written_by_their_canonical_names():
+    case = load_case("terzaghi", ["efg.weight_u=E-A", "efg.weight_p=\" Q \""])
+    assert case.efg.weight_u == Weight.parse("exp:0.5") == Weight.parse("e-a")
+    assert case.efg.weight_p == BUILTIN["terzaghi"].efg.weight_p == Weight.parse("quartic")
+    assert isinstance(case.efg.weight_u, Weight) and str(case.efg.weight_u) == "exp:0.5"
+    data = json.loads(json.dumps(case.to_dict()))
+    assert (data["efg"]["weight_u"], data["efg"]["weight_p"]) == ("exp:0.5", "quartic")
+    assert case_from_dict(data) == case
+    odd = load_case("terzaghi", ["efg.weight_u=exp:0.123456789"]).efg.weight_u
+    assert odd.c == 0.123456789 and Weight.parse(str(odd)) == odd  # the name is exact
+
+
 @pytest.mark.parametrize("name", ["quartic", "Q", " cubic ", "E-A", "e-b", "exp:0.3",
                                   "exp:1e-3", "exp:1000", "gauss", "exp:", "exp:0", "exp:-1",
                                   "exp:abc", "exp:inf", "exp:nan", "exp:1e-4", "exp:1001",
@@ -268,7 +288,7 @@ def test_cases_accept_exactly_the_weights_of_the_solver(name):
         return True
 
     assert accepted(lambda: load_case("terzaghi", [f'efg.weight_p="{name}"'])) \
-        == accepted(lambda: get_weight(name))
+        == accepted(lambda: Weight.parse(name))
 
 
 def test_triangle_order_bound_is_scikit_fems():

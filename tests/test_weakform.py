@@ -5,7 +5,7 @@ import pytest
 
 from soil.elastic import LinearElastic
 from soil.kinematics import strain_increment
-from soil.problems import Fluid
+from soil.case import Fluid
 from soil import weakform
 
 FLUID = Fluid(permeability=1e-4, gamma_w=10.0, biot_alpha=0.8, storage=1e-3)

@@ -1,0 +1,1 @@
+"""The built-in cases, one TOML file each."""

@@ -1,0 +1,256 @@
+"""The TOML schema of a case: sections, keys, defaults, load-time bounds and overrides.
+
+A case is a TOML file (or a built-in name, see :func:`soil.problems.builtin_cases`) read
+by :func:`soil.problems.load_case`; :func:`soil.validation.case_from_dict` checks it
+against this schema and builds the :class:`soil.case.Case` the solvers read. This module
+holds the schema's documentation and constants (the sections and their keys, the
+bounds) and the edits of a raw case dict (:func:`apply_override`,
+:func:`expand_displacement`). Units are those of the case (kPa, m, s in the built-in
+cases).
+
+Conventions: x to the right, y up, origin at the lower-left corner of the rectangle;
+stress and traction are tension positive (a traction ``[0, -1]`` on the top edge is a
+compressive load); pore water pressure p_w is compression positive;
+``sigma = sigma' - alpha p_w I``. No body forces.
+
+Schema (every case has the same one; unknown keys are an error)::
+
+    name = "my-case"                  # default: the file's stem
+    description = "one line"
+    analysis = "coupled"              # "coupled" (Biot u-p, default) or "static" (dry,
+                                      # one load step, no pore pressure)
+
+    [geometry]
+    shape = "rectangle"               # the only shape
+    width = 3.0                       # m, along x, in [1e-6, 1e6]
+    height = 4.0                      # m, along y, in [1e-6, 1e6]
+
+    [discretisation]
+    nx = 7                            # grid nodes along x (>= 2): spacing width/(nx-1)
+    ny = 9                            # grid nodes along y (>= 2): spacing height/(ny-1)
+    layout = "grid+centres"           # "grid" (default) or grid plus one node per cell centre
+                                      # (spacing aspect hx/hy in [1e-3, 1e3])
+    jitter = 0.0                      # interior nodes moved at random by up to this
+                                      # fraction of the spacing (0 <= jitter < 0.25)
+    seed = 0                          # seed of the jitter (numpy default_rng)
+
+    [material]                        # soil.materials.material_from_spec, plus fluid keys:
+    preset = "table1"
+    model = "original"                # "original", "modified" or "elastic"
+    permeability = 0.0                # k [m/s] >= 0 (Darcy: q = -(k/gamma_w) grad p_w)
+    gamma_w = 9.81                    # unit weight of water [kN/m3] > 0
+    biot_alpha = 1.0                  # Biot coefficient in (0, 1]
+    storage = 0.0                     # S = 1/M_biot [1/kPa] >= 0
+
+    [initial]                         # optional
+    pore_pressure = "balance"         # a number (default 0) or "balance": p_w0 = -p'0/alpha,
+                                      # total stress zero; sigma'0 = -p'0 I (material p0)
+
+    [boundary.left]                   # each of left, right, bottom, top exactly once
+    ux = "fixed"                      # "free" (default), "fixed", "prescribed", "rigid"
+    uy = "free"
+    # displacement = "roller"         # shorthand instead of ux/uy: "roller" (normal
+                                      # component fixed), "fixed" or "free"
+    traction = [0.0, 0.0]             # total traction [kPa] x load factor (default zero)
+    water = "impermeable"             # or "drained" (p_w = 0); drained wins at a corner
+
+    [loading]                         # optional
+    velocity_gradient = [[0.0, 0.0], [0.0, -0.01]]   # L [1/s], constant (default zero)
+    load = 1.0                        # a factor from t = 0+ (step load, the default) or
+                                      # [[t0, f0], [t1, f1], ...] piecewise linear
+
+    [time]
+    end = 20.0                        # s
+    steps = 100                       # equal steps, or instead: dt0, growth, dt_max
+
+    [probes]                          # optional: name = [x, y] inside the domain;
+    centre = [1.5, 2.0]               # history columns are named like "p_w@centre"
+
+    [exact]                           # optional: a closed form of soil.analytical
+    solution = "timoshenko-beam"      # boundary data for "exact" edges, error reference
+    P = 1000.0                        # ... and the solution's parameters
+
+    [diagnostics]                     # optional, both solvers
+    uniqueness = false                # per step, the smallest eigenvalue of the tangent
+                                      # restricted to the undrained constraint
+                                      # (soil.bifurcation; history column "uniqueness")
+
+    [efg]                             # optional meshless settings (defaults shown)
+    weight_u = "quartic"              # MLS weight of u: quartic (Q), cubic or exp:C with
+                                      # 1e-3 <= C <= 1e3 (E-A = exp:0.5, E-B = exp:0.25)
+    scale_u = 1.3                     # support = scale x distance to the 8th nearest node,
+                                      # 1 <= scale <= 1000
+    weight_p = "quartic"              # the same for the pore pressure p_w
+    scale_p = 1.3
+    cells = "delaunay"                # background cells: delaunay or squares
+    order = 2                         # Gauss order (squares: per direction; triangles:
+                                      # degree, at most 19)
+    penalty = 1e6                     # penalty factor relative to the stiffness scale
+    correction = "vci"                # consistent test gradients (efg.vci) or "none"
+
+Boundary kinds of a displacement component:
+
+* ``free``: natural; the edge's traction component acts there.
+* ``fixed``: zero displacement.
+* ``prescribed``: velocity ``v = L x`` at the node's current position, L from
+  ``loading.velocity_gradient`` (which must then be non-zero).
+* ``exact``: displacement from the case's ``[exact]`` solution; ``traction = "exact"``
+  likewise takes the traction ``sigma n`` from it.
+* ``rigid`` (``uy`` of the top or bottom edge only): the whole edge settles by one unknown
+  uniform vertical displacement (a frictionless rigid plate, Mandel's problem) whose total
+  force is ``traction[1] x load factor x (initial edge length)`` per unit thickness.
+
+At a corner both edges' conditions apply; two different non-free kinds on the same
+component of a corner are an error. Tractions are loads in excess of the initial state,
+which is taken as in equilibrium.
+
+Every number must be finite. Load-time bounds (:func:`soil.validation.case_from_dict`
+refuses a case outside them, naming the key, so that ``soilwater show`` fails wherever
+``run`` would):
+
+* ``geometry.width`` and ``height`` in [1e-6, 1e6] m, and the grid spacing aspect
+  ``hx/hy = (width/(nx-1)) / (height/(ny-1))`` in [1e-3, 1e3]: bounds against absurd
+  input (a width of 1e300 overflows the EFG's cell search, inf breaks both solvers).
+  Within them a stretched plain grid still needs a larger EFG scale factor, about a
+  quarter of the aspect (long over short spacing) beyond an aspect of 4; the solver
+  reports that, naming the scale factor's key.
+* The displacement must be restrained against the three rigid motions: some edge's ``ux``
+  and some edge's ``uy`` ``fixed``, ``prescribed`` or ``exact`` (a ``rigid`` plate is
+  load-controlled and stops no translation), and rotation stopped by ``ux`` restrained on
+  the left or right edge, ``uy`` on the top or bottom edge, or ``ux`` on both the top and
+  bottom (``uy`` on both the left and right).
+* ``efg.scale_u`` and ``scale_p`` in [1, 1000]: below 1 a node's support stops short of
+  its 8th nearest node, the distance that defines it, and whether each point still sees
+  3 non-collinear nodes depends on the layout (on the built-in cases and their variants
+  the smallest working factor ranges from 0.69 to 0.90, with condition numbers down to
+  1e-7, and stretched grids need more); above 1000 the supports cover the body many times
+  over and the moment matrices' conditioning, falling as 1/scale^2, nears the MLS
+  safeguard (reached near 1e4 to 1e5).
+* ``efg.weight_u`` and ``weight_p``: :func:`soil.settings.weight_form` (outside
+  1e-3 <= C <= 1e3 the exponential weight underflows to a spike or, above, equals its
+  limit ``1 - r^2`` to 1e-6 while its formula loses digits and divides by zero near
+  C = 1e8).
+* ``efg.order`` an integer >= 1, at most 19 with Delaunay cells (the highest triangle
+  rule of scikit-fem).
+
+Time stepping: ``steps`` gives equal steps; otherwise ``t_1 = dt0`` and
+``t_{n+1} = t_n + min((growth - 1) t_n, dt_max)`` (time levels grow geometrically until the
+step reaches ``dt_max``), the last step cut to land on ``end``. This is MOOSE's Terzaghi
+stepping (``dt = min(0.5 t, 0.1)``, peer-data case A): 118 steps to t = 10.
+
+:func:`soil.problems.load_case` also takes overrides ``"section.key=value"`` (value in
+TOML syntax, a bare word is read as a string; :func:`apply_override`), e.g.
+``material.permeability=1e-6`` or ``boundary.top.water="drained"``. Setting
+``time.steps`` drops the geometric keys (and the reverse); setting an edge's
+``displacement`` replaces its ``ux`` and ``uy``.
+"""
+
+import tomllib
+
+from soil.errors import require
+
+SECTIONS = ("geometry", "discretisation", "material", "initial", "boundary", "loading",
+            "time", "probes", "exact", "diagnostics", "efg")
+"""The sections of a case, besides the top-level keys ``name``, ``description`` and
+``analysis``."""
+KEYS = {
+    "geometry": ("shape", "width", "height"),
+    "discretisation": ("nx", "ny", "layout", "jitter", "seed"),
+    "diagnostics": ("uniqueness",),
+    "initial": ("pore_pressure",),
+    "edge": ("ux", "uy", "displacement", "traction", "water"),
+    "loading": ("velocity_gradient", "load"),
+    "time": ("end", "steps", "dt0", "growth", "dt_max"),
+    "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "cells", "order", "penalty",
+            "correction"),
+}
+"""The keys each section accepts (``edge``: each ``[boundary.<side>]``). ``[material]``,
+``[probes]`` and ``[exact]`` take the keys of the material, the probe names and the
+solution's parameters."""
+GEOMETRIC = ("dt0", "growth", "dt_max")
+"""The keys of geometric time stepping (instead of ``time.steps``)."""
+LENGTHS = (1e-6, 1e6)
+"""Accepted range of ``geometry.width`` and ``height`` [m]."""
+ASPECTS = (1e-3, 1e3)
+"""Accepted range of the grid spacing aspect ``hx/hy``."""
+SCALES = (1.0, 1e3)
+"""Accepted range of the MLS support scale factors ``efg.scale_u`` and ``scale_p``."""
+MAX_TRIANGLE_ORDER = 19
+"""Highest degree of scikit-fem's triangle rules (``efg.order`` with Delaunay cells)."""
+_NORMAL = {"left": "ux", "right": "ux", "bottom": "uy", "top": "uy"}
+
+
+def apply_override(data, text):
+    """Set ``section.key[.key]=value`` in a raw case dict, in place.
+
+    Parameters
+    ----------
+    data : dict
+        The case in TOML layout, not yet validated.
+    text : str
+        ``section.key=value`` with the value in TOML syntax (a bare word is read as a
+        string), e.g. ``material.permeability=1e-6`` or ``boundary.top.water=drained``.
+        Setting ``time.steps`` drops the geometric keys (and the reverse); setting an
+        edge's ``displacement`` replaces its ``ux`` and ``uy``, and setting ``ux`` or
+        ``uy`` of an edge given by ``displacement`` expands the shorthand first.
+
+    Raises
+    ------
+    InputError
+        A malformed override, or one that descends into a value.
+
+    Examples
+    --------
+    >>> data = {"time": {"end": 1.0, "dt0": 0.1, "growth": 1.5, "dt_max": 0.5}}
+    >>> apply_override(data, "time.steps=10")
+    >>> data
+    {'time': {'end': 1.0, 'steps': 10}}
+    """
+    key, sep, value = text.partition("=")
+    path = [part.strip() for part in key.split(".")]
+    require(sep and all(path), f"override {text!r}: write section.key=value, "
+            "e.g. material.permeability=1e-6")
+    try:
+        value = tomllib.loads(f"v = {value}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = value.strip()
+    table = data
+    for depth, part in enumerate(path[:-1]):
+        table = table.setdefault(part, {})
+        require(isinstance(table, dict), f"override {text!r}: "
+                f"{'.'.join(path[:depth + 1])} is a value, not a section")
+    last = path[-1]
+    for other in _replaced_keys(path):
+        table.pop(other, None)
+    if len(path) == 3 and last in ("ux", "uy") and "displacement" in table:
+        table.update(expand_displacement(table.pop("displacement"), path[1]))
+    table[last] = value
+
+
+def _replaced_keys(path):
+    """Keys that an override of ``path`` replaces (the other way of saying the same)."""
+    if path[0] == "time" and path[-1] == "steps":
+        return GEOMETRIC
+    if path[0] == "time" and path[-1] in GEOMETRIC:
+        return ("steps",)
+    if path[0] == "boundary" and path[-1] == "displacement":
+        return ("ux", "uy")
+    return ()
+
+
+def expand_displacement(value, side):
+    """The ``displacement`` shorthand of edge ``side`` as ``{"ux": ..., "uy": ...}``.
+
+    ``roller`` fixes the edge's normal component (``ux`` on the left and right edges,
+    ``uy`` on the bottom and top) and frees the other; ``fixed`` and ``free`` set both.
+
+    Examples
+    --------
+    >>> expand_displacement("roller", "bottom")
+    {'ux': 'free', 'uy': 'fixed'}
+    """
+    require(value in ("roller", "fixed", "free"), f"boundary.{side}.displacement = "
+            f"{value!r} is unknown: use roller, fixed or free (or set ux and uy)")
+    if value == "roller":
+        return {"ux": "free", "uy": "free", _NORMAL[side]: "fixed"}
+    return {"ux": value, "uy": value}

@@ -1,0 +1,376 @@
+"""Validation: a plain dict in TOML layout to a :class:`soil.case.Case`, one reader per
+section.
+
+:func:`case_from_dict` checks every entry against the schema of :mod:`soil.schema` (keys,
+types, finite numbers, bounds, supports against rigid motion) and refuses a bad one with
+an :class:`~soil.errors.InputError` of one line naming the key and the fix.
+"""
+
+import math
+import re
+
+import numpy as np
+
+from soil.analytical import exact_solution
+from soil.case import (ANALYSES, EDGES, KINDS, LAYOUTS, MAX_STEPS, WATER, Boundary, Case,
+                       Diagnostics, Discretisation, Edge, Fluid, Geometry, Initial, Loading,
+                       Probe, TimeStepping)
+from soil.errors import InputError, require
+from soil.materials import FLUID_KEYS, material_from_spec
+from soil.schema import (ASPECTS, GEOMETRIC, KEYS, LENGTHS, MAX_TRIANGLE_ORDER, SCALES,
+                         SECTIONS, expand_displacement)
+from soil.settings import CELLS, CORRECTIONS, DEFAULT_SCALE, EFGSettings, Weight
+
+_RESTRAINED = ("fixed", "prescribed", "exact")
+_CORNERS = (("left", "bottom"), ("left", "top"), ("right", "bottom"), ("right", "top"))
+_REQUIRED = object()
+
+
+def case_from_dict(data):
+    """Validate a plain dict in TOML layout and build the :class:`~soil.case.Case`.
+
+    Parameters
+    ----------
+    data : dict
+        The case as :mod:`soil.schema` lays it out (e.g. parsed TOML, or
+        ``Case.to_dict()``); not modified.
+
+    Returns
+    -------
+    Case
+
+    Raises
+    ------
+    InputError
+        On any bad or unknown entry, including material errors from
+        :func:`soil.materials.material_from_spec`.
+    """
+    require(isinstance(data, dict), "a case must be a table of sections")
+    _check_keys(data, ("name", "description", "analysis") + SECTIONS, "case", "section")
+    geometry = _geometry(_section(data, "geometry"))
+    material_spec, fluid = _material(_section(data, "material"))
+    probes = _probes(_section(data, "probes", {}), geometry)
+    loading = _loading(_section(data, "loading", {}))
+    case = Case(
+        name=_string(data, "name", "case", "case"),
+        description=_string(data, "description", "case", ""),
+        analysis=_string(data, "analysis", "case", "coupled", ANALYSES),
+        geometry=geometry,
+        discretisation=_discretisation(_section(data, "discretisation")),
+        material_spec=material_spec, fluid=fluid,
+        initial=_initial(_section(data, "initial", {})),
+        boundary=_boundary(_section(data, "boundary"), loading),
+        loading=loading,
+        time=_time(_section(data, "time")),
+        probes=probes,
+        exact=_exact(_section(data, "exact", {})),
+        efg=_efg(_section(data, "efg", {})),
+        diagnostics=_diagnostics(_section(data, "diagnostics", {})),
+    )
+    _require_aspect(case)
+    _require_exact_if_used(case)
+    case.times()
+    return case
+
+
+def _section(data, name, default=_REQUIRED):
+    """``data[name]`` as a table; required unless a default is given."""
+    require(name in data or default is not _REQUIRED,
+            f"case: section [{name}] is missing: add it (see soil/schema.py)")
+    table = data.get(name, default)
+    require(isinstance(table, dict), f"{name} must be a section [{name}], not a value")
+    return table
+
+
+def _check_keys(table, allowed, where, what="key"):
+    """Reject keys of ``table`` outside ``allowed``."""
+    for key in table:
+        require(key in allowed, f"{where}: unknown {what} {key!r}: "
+                f"allowed are {', '.join(allowed)}")
+
+
+def _number(table, key, where, default=_REQUIRED):
+    """A finite float entry (ints accepted, bools not)."""
+    require(key in table or default is not _REQUIRED, f"{where}.{key} is missing: set it")
+    value = table.get(key, default)
+    require(isinstance(value, (int, float)) and not isinstance(value, bool)
+            and math.isfinite(value), f"{where}.{key} = {value!r} must be a finite number")
+    return float(value)
+
+
+def _integer(table, key, where):
+    """A required integer entry."""
+    require(key in table, f"{where}.{key} is missing: set it")
+    value = table[key]
+    require(isinstance(value, int) and not isinstance(value, bool),
+            f"{where}.{key} = {value!r} must be an integer")
+    return value
+
+
+def _string(table, key, where, default, choices=None):
+    """A string entry, optionally one of ``choices``."""
+    value = table.get(key, default)
+    require(isinstance(value, str), f"{where}.{key} = {value!r} must be a string")
+    if choices is not None:
+        require(value in choices,
+                f"{where}.{key} = {value!r} is unknown: use one of {', '.join(choices)}")
+    return value
+
+
+def _pair(value, where):
+    """Two numbers ``[a, b]`` as a tuple of floats."""
+    require(isinstance(value, (list, tuple)) and len(value) == 2,
+            f"{where} = {value!r} must be a pair of numbers [a, b]")
+    return tuple(_number({"v": v}, "v", where) for v in value)
+
+
+def _geometry(table):
+    _check_keys(table, KEYS["geometry"], "geometry")
+    _string(table, "shape", "geometry", "rectangle", ("rectangle",))
+    width, height = _number(table, "width", "geometry"), _number(table, "height", "geometry")
+    for key, value in (("width", width), ("height", height)):
+        require(LENGTHS[0] <= value <= LENGTHS[1], f"geometry.{key} = {value:g} must lie "
+                f"in [{LENGTHS[0]:g}, {LENGTHS[1]:g}] m: give the size of the rectangle in m")
+    return Geometry(width=width, height=height)
+
+
+def _discretisation(table):
+    _check_keys(table, KEYS["discretisation"], "discretisation")
+    nx, ny = _integer(table, "nx", "discretisation"), _integer(table, "ny", "discretisation")
+    require(nx >= 2, f"discretisation.nx = {nx} must be at least 2 (nodes along x)")
+    require(ny >= 2, f"discretisation.ny = {ny} must be at least 2 (nodes along y)")
+    jitter = _number(table, "jitter", "discretisation", 0.0)
+    require(0 <= jitter < 0.25, f"discretisation.jitter = {jitter} must lie in [0, 0.25) "
+            "(a fraction of the nodal spacing)")
+    seed = table.get("seed", 0)
+    require(isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0,
+            f"discretisation.seed = {seed!r} must be a non-negative integer")
+    return Discretisation(nx=nx, ny=ny,
+                          layout=_string(table, "layout", "discretisation", "grid", LAYOUTS),
+                          jitter=jitter, seed=seed)
+
+
+def _require_aspect(case):
+    """Refuse sliver cells: the spacing aspect hx/hy must lie in :data:`ASPECTS`."""
+    hx, hy = case.spacing
+    require(ASPECTS[0] <= hx / hy <= ASPECTS[1], f"discretisation: the grid spacing aspect "
+            f"hx/hy = {hx:g}/{hy:g} = {hx / hy:g} (geometry.width/(discretisation.nx - 1) "
+            f"over geometry.height/(discretisation.ny - 1)) must lie in [{ASPECTS[0]:g}, "
+            f"{ASPECTS[1]:g}]: change discretisation.nx or discretisation.ny")
+
+
+def _diagnostics(table):
+    _check_keys(table, KEYS["diagnostics"], "diagnostics")
+    value = table.get("uniqueness", False)
+    require(isinstance(value, bool), f"diagnostics.uniqueness = {value!r} must be true or "
+            "false")
+    return Diagnostics(uniqueness=value)
+
+
+def _material(table):
+    """Split ``[material]`` into the skeleton spec (validated by building it) and Fluid."""
+    spec = {}
+    for key in table:
+        if key in FLUID_KEYS:
+            continue
+        spec[key] = (_string(table, key, "material", None) if key in ("model", "preset")
+                     else _number(table, key, "material"))
+    material_from_spec(spec)
+    fluid = Fluid(**{key: _number(table, key, "material", getattr(Fluid, key))
+                     for key in FLUID_KEYS})
+    require(fluid.permeability >= 0, f"material.permeability = {fluid.permeability} must "
+            "be >= 0 (m/s; 0 means undrained)")
+    require(fluid.gamma_w > 0, f"material.gamma_w = {fluid.gamma_w} must be positive")
+    require(0 < fluid.biot_alpha <= 1,
+            f"material.biot_alpha = {fluid.biot_alpha} must lie in (0, 1]")
+    require(fluid.storage >= 0, f"material.storage = {fluid.storage} must be >= 0 "
+            "(S = 1/M_biot; 0 for incompressible constituents)")
+    return tuple(sorted(spec.items())), fluid
+
+
+def _initial(table):
+    _check_keys(table, KEYS["initial"], "initial")
+    value = table.get("pore_pressure", 0.0)
+    if value == "balance":
+        return Initial("balance")
+    require(not isinstance(value, str), f"initial.pore_pressure = {value!r} must be a "
+            "number or \"balance\"")
+    return Initial(_number(table, "pore_pressure", "initial", 0.0))
+
+
+def _boundary(table, loading):
+    _check_keys(table, EDGES, "boundary", "edge")
+    for side in EDGES:
+        require(side in table, f"boundary: edge {side!r} is missing: add [boundary.{side}] "
+                "(every edge of the rectangle exactly once)")
+    boundary = Boundary(**{side: _edge(_section(table, side), side, loading)
+                           for side in EDGES})
+    for a, b in _CORNERS:
+        for comp in ("ux", "uy"):
+            kinds = {getattr(getattr(boundary, a), comp), getattr(getattr(boundary, b), comp)}
+            require(len(kinds - {"free"}) <= 1, f"boundary.{a}.{comp} and boundary.{b}."
+                    f"{comp} conflict at their corner ({' vs '.join(sorted(kinds))}): "
+                    "make them agree or set one free")
+    _require_supports(boundary)
+    return boundary
+
+
+def _require_supports(boundary):
+    """Refuse a body free to move rigidly: x and y translation and rotation must be stopped.
+
+    ``fixed``, ``prescribed`` and ``exact`` restrain a component; a ``rigid`` plate is
+    load-controlled and lets its edge settle. It would stop rotation, but never decides:
+    the uy that stops y translation is on a horizontal edge (stopping rotation too) or
+    on a vertical one, which may not meet the plate's edge with another kind.
+    """
+    ux = {side for side, edge in boundary.items() if edge.ux in _RESTRAINED}
+    uy = {side for side, edge in boundary.items() if edge.uy in _RESTRAINED}
+    kinds = '"fixed", "prescribed" or "exact"'
+    require(ux, "boundary: the body is not supported along x (no edge restrains ux): set "
+            f"an edge's ux to {kinds}, e.g. boundary.left.ux = \"fixed\"")
+    require(uy, "boundary: the body is not supported along y (no edge restrains uy; a "
+            f"rigid plate carries a load): set an edge's uy to {kinds}, e.g. "
+            "boundary.bottom.uy = \"fixed\"")
+    require(ux & {"left", "right"} or uy & {"bottom", "top"}
+            or {"bottom", "top"} <= ux or {"left", "right"} <= uy,
+            "boundary: the body is not supported against rotation: restrain ux on the left "
+            "or right edge or uy on the top or bottom edge (e.g. boundary.left.ux = "
+            "\"fixed\")")
+
+
+def _edge(table, side, loading):
+    where = f"boundary.{side}"
+    _check_keys(table, KEYS["edge"], where)
+    table = dict(table)
+    if "displacement" in table:
+        require("ux" not in table and "uy" not in table,
+                f"{where}: give either displacement or ux/uy, not both")
+        table.update(expand_displacement(table.pop("displacement"), side))
+    edge = Edge(ux=_string(table, "ux", where, "free", KINDS),
+                uy=_string(table, "uy", where, "free", KINDS),
+                traction=_traction(table.get("traction", (0.0, 0.0)), f"{where}.traction"),
+                water=_string(table, "water", where, "impermeable", WATER))
+    require(edge.ux != "rigid" and (edge.uy != "rigid" or side in ("top", "bottom")),
+            f"{where}: 'rigid' applies to uy of the top or bottom edge only")
+    for comp, t in zip(("ux", "uy"), np.broadcast_to(np.asarray(edge.traction, object), 2)):
+        kind = getattr(edge, comp)
+        require(kind != "prescribed" or np.any(loading.L),
+                f"{where}.{comp} = 'prescribed' needs a non-zero "
+                "loading.velocity_gradient: set it, or use 'fixed'")
+        require(edge.traction == "exact" or t == 0 or kind in ("free", "rigid"),
+                f"{where}.traction acts on {comp}, "
+                f"which is {kind!r}: set that traction component to 0 or {comp} free")
+    return edge
+
+
+def _traction(value, where):
+    """``[tx, ty]`` or ``"exact"`` (from the case's exact solution)."""
+    return "exact" if value == "exact" else _pair(value, where)
+
+
+def _exact(table):
+    """``[exact]``: ``solution`` (see soil.analytical.SOLUTIONS) and its parameters."""
+    if not table:
+        return ()
+    require("solution" in table, "exact: name the solution, e.g. solution = "
+            "\"timoshenko-beam\" (see soil/analytical.py)")
+    params = {k: v for k, v in table.items() if k != "solution"}
+    try:
+        exact_solution(table["solution"], **params)(np.zeros((1, 2)))
+    except TypeError as err:
+        raise InputError(f"exact: bad parameters for {table['solution']!r}: {err}") from None
+    return tuple(sorted((k, _frozen(v)) for k, v in table.items()))
+
+
+def _frozen(value):
+    """Lists to tuples, recursively (hashable, comparable)."""
+    return tuple(_frozen(v) for v in value) if isinstance(value, list) else value
+
+
+def _require_exact_if_used(case):
+    uses = [f"boundary.{name}" for name, edge in case.boundary.items()
+            if "exact" in (edge.ux, edge.uy, edge.traction)]
+    require(not uses or case.exact, f"{uses[0] if uses else ''} uses 'exact' but the case "
+            "has no [exact] section: add one naming the solution")
+
+
+def _efg(table):
+    _check_keys(table, KEYS["efg"], "efg")
+    defaults = EFGSettings()
+    order = table.get("order", defaults.order)
+    require(isinstance(order, int) and not isinstance(order, bool) and order >= 1,
+            f"efg.order = {order!r} must be an integer >= 1")
+    values = {"weight_u": _string(table, "weight_u", "efg", str(defaults.weight_u)),
+              "scale_u": _number(table, "scale_u", "efg", defaults.scale_u),
+              "weight_p": _string(table, "weight_p", "efg", str(defaults.weight_p)),
+              "scale_p": _number(table, "scale_p", "efg", defaults.scale_p),
+              "cells": _string(table, "cells", "efg", defaults.cells, CELLS),
+              "order": order,
+              "penalty": _number(table, "penalty", "efg", defaults.penalty),
+              "correction": _string(table, "correction", "efg", defaults.correction,
+                                    CORRECTIONS)}
+    require(values["cells"] != "delaunay" or order <= MAX_TRIANGLE_ORDER,
+            f"efg.order = {order} must be at most {MAX_TRIANGLE_ORDER} with efg.cells = "
+            "\"delaunay\" (the highest triangle rule): lower it or use efg.cells = "
+            "\"squares\"")
+    for field in ("u", "p"):
+        key, scale = f"efg.scale_{field}", values[f"scale_{field}"]
+        name = f"weight_{field}"
+        values[name] = Weight.parse(values[name], f"efg.{name}")
+        require(scale >= SCALES[0], f"{key} = {scale:g} must be >= {SCALES[0]:g} (each "
+                "node's support must reach its 8th nearest node): increase the scale "
+                f"factor, e.g. to {DEFAULT_SCALE:g}")
+        require(scale <= SCALES[1], f"{key} = {scale:g} must be <= {SCALES[1]:g} (beyond, "
+                "the MLS moment matrices approach singularity): use 1.2 to 2, e.g. "
+                f"{DEFAULT_SCALE:g}")
+    require(values["penalty"] > 0, f"efg.penalty = {values['penalty']:g} must be positive")
+    return EFGSettings(**values)
+
+
+def _loading(table):
+    _check_keys(table, KEYS["loading"], "loading")
+    L = table.get("velocity_gradient", ((0.0, 0.0), (0.0, 0.0)))
+    require(isinstance(L, (list, tuple)) and len(L) == 2, "loading.velocity_gradient "
+            "must be [[L11, L12], [L21, L22]] (1/s)")
+    L = tuple(_pair(row, "loading.velocity_gradient row") for row in L)
+    load = table.get("load", 1.0)
+    if not isinstance(load, (list, tuple)):
+        return Loading(L, _number(table, "load", "loading", 1.0))
+    points = tuple(_pair(p, "loading.load point [t, factor]") for p in load)
+    times = [t for t, _ in points]
+    require(points and times[0] >= 0 and all(np.diff(times) > 0), "loading.load: give "
+            "[t, factor] points with increasing times t >= 0, or one number (step load)")
+    return Loading(L, points)
+
+
+def _time(table):
+    _check_keys(table, KEYS["time"], "time")
+    end = _number(table, "end", "time")
+    require(end > 0, f"time.end = {end} must be positive (s)")
+    if "steps" in table:
+        require(not set(GEOMETRIC) & set(table), "time: give either steps or dt0, "
+                "growth, dt_max, not both")
+        steps = _integer(table, "steps", "time")
+        require(1 <= steps <= MAX_STEPS, f"time.steps = {steps} must lie in 1..{MAX_STEPS}")
+        return TimeStepping(end=end, steps=steps)
+    require(set(GEOMETRIC) <= set(table), "time: give steps (equal steps) or all of dt0, "
+            "growth, dt_max (geometric steps)")
+    dt0, growth, dt_max = (_number(table, key, "time") for key in GEOMETRIC)
+    require(0 < dt0 <= dt_max, f"time.dt0 = {dt0} must be positive and at most "
+            f"time.dt_max = {dt_max}")
+    require(growth > 1, f"time.growth = {growth} must exceed 1 (t_(n+1) = growth t_n)")
+    return TimeStepping(end=end, dt0=dt0, growth=growth, dt_max=dt_max)
+
+
+def _probes(table, geometry):
+    probes = []
+    for name, point in table.items():
+        require(re.fullmatch(r"[A-Za-z0-9_-]+", name), f"probes.{name}: use letters, "
+                "digits, _ and - in probe names (they become column names)")
+        x, y = _pair(point, f"probes.{name}")
+        tol = 1e-9 * max(geometry.width, geometry.height)
+        require(-tol <= x <= geometry.width + tol and -tol <= y <= geometry.height + tol,
+                f"probes.{name} = [{x}, {y}] lies outside the domain [0, {geometry.width}]"
+                f" x [0, {geometry.height}]: move it inside")
+        probes.append(Probe(name, (x, y)))
+    return tuple(probes)
