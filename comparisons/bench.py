@@ -5,9 +5,10 @@ Two measurements, both on this machine in one command (never timed tests):
 1. **One coupled step** of the unconfined-compression geometry (grid layout, 3 x 4 m, one
    step of 0.2 % axial strain) at about 10^3, 3 x 10^3, ..., 10^5 nodes, with the Cam-clay
    skeleton of the case and with a linear elastic one, for ``efg``, ``fem-p1p1`` and
-   ``fem-th`` on the same vertices. The solvers' own phase timers give shape functions (FEM:
-   basis construction), background cells (EFG only), assembly of the tangent, linear solve
-   (factorisations and back-substitutions), constitutive update, and the whole step. Each
+   ``fem-th`` on the same vertices. The solvers' own phase timers
+   (:data:`soil.coupling.TIMERS`) give shape functions (FEM: basis construction), background
+   cells (FEM: moving the mesh), assembly of the tangent, linear solve (factorisations and
+   back-substitutions), constitutive update, and the whole step. Each
    run is a forked child process, so its peak resident memory is its own.
 2. **Shape functions alone**: MLS values and gradients against scikit-fem's
    ``CellBasis`` construction (P1 and P2) at the same quadrature points (3 per triangle of
@@ -42,13 +43,10 @@ MATERIALS = ("cam-clay", "elastic")
 TIME_LIMIT = 240.0
 #: Linear elastic skeleton of the elastic runs (kPa), at the case's p'0.
 ELASTIC = (("model", "elastic"), ("E", 200.0), ("nu", 0.3), ("p0", 3.0))
-#: Phase: (EFG timer, FEM timer) in the solvers' ``summary["timings"]``.
-PHASES = {"shape functions": ("shape_functions_s", "basis_s"),
-          "cells": ("cells_s", None),
-          "assembly": ("assembly_s", "assembly_s"),
-          "solve": ("solve_s", "solve_s"),
-          "constitutive": ("material_s", "material_s"),
-          "step": ("total_s", "total_s")}
+#: Phase: its timer in ``summary["timings"]`` (:data:`soil.coupling.TIMERS`).
+PHASES = {"shape functions": "shape_functions_s", "cells": "cells_s",
+          "assembly": "assembly_s", "solve": "solve_s", "constitutive": "material_s",
+          "step": "total_s"}
 
 
 def compression(nodes, material="cam-clay"):
@@ -86,12 +84,11 @@ def one_step(method, nodes, material):
               else fem_reference.solver.solve(case, method, progress=False))
     wall = time.perf_counter() - tic
     summary = result.summary
-    column = 0 if method == "efg" else 1
     row = {"method": method, "material": material, "nodes": len(case.nodes()),
            "dofs": summary["dofs"], "iterations": int(result.history.iterations.sum()),
            "factorisations": summary["factorisations"], "wall_s": wall, "status": "ok"}
-    for phase, timers in PHASES.items():
-        row[phase] = summary["timings"][timers[column]] if timers[column] else np.nan
+    for phase, timer in PHASES.items():
+        row[phase] = summary["timings"][timer]
     row["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return row
 
@@ -217,7 +214,7 @@ def exponents(table):
 
 
 def targets(table, shapes, growth):
-    """Issue 7's targets: measured value, target and verdict, one row each."""
+    """The speed targets: measured value, target and verdict, one row each."""
     rows = []
     largest = shapes.iloc[-1]
     for basis in ("P2", "P1"):

@@ -1,5 +1,5 @@
 """Background cells for the EFG integrals: squares with quarter cells along the boundary,
-or Delaunay triangles of the current nodes (design.md section 5, paper Figs. 2, 3 and 5).
+or Delaunay triangles of the current nodes (paper Figs. 2, 3 and 5).
 
 Both builders take the current configuration and are vectorised (no loop over cells or
 points), so they can be rebuilt at every step of a large-deformation run. The boundary is
@@ -51,6 +51,25 @@ class Quadrature(NamedTuple):
     weights: np.ndarray
     cells: np.ndarray
     triangles: np.ndarray | None = None
+
+
+def background(case, nodes, loop, settings):
+    """Integration points of a case's background cells on the configuration ``nodes``.
+
+    Parameters
+    ----------
+    case : Case
+        Its grid spacing sizes the square cells.
+    nodes : ndarray, shape (N, 2)
+        Current node positions [m].
+    loop : ndarray of int
+        The boundary nodes in counter-clockwise order.
+    settings : EFGSettings
+        ``cells`` (``squares`` or ``delaunay``) and the Gauss ``order``.
+    """
+    if settings.cells == "squares":
+        return square_cells(nodes[loop], case.spacing, order=settings.order)
+    return delaunay_cells(nodes, nodes[loop], order=settings.order)
 
 
 def square_cells(boundary, spacing, order=2):

@@ -3,34 +3,20 @@
 Every node carries a displacement and a pore pressure parameter; displacement and pore
 pressure each have their own MLS weight and scale factor (``[efg]`` of the case). A step
 from t_n to t_(n+1) is solved on the configuration x_n (shape functions and background
-cells rebuilt there) for the displacement increment ``du`` and ``p_w`` at t_(n+1):
+cells rebuilt there) for the displacement increment ``du`` and ``p_w`` at t_(n+1). Its
+integrand and consistent tangent are :mod:`soil.weakform`'s (equilibrium with
+``J sigma F^-T`` on x_n, backward-Euler continuity), shared with the FEM reference; the
+stress is the material's return mapping with the midpoint stretching and the
+Hughes-Winget spin (:func:`soil.coupling.material_update`).
 
-* equilibrium on the current configuration, ``int grad(dv) : sigma dOmega_(n+1) = ext``,
-  ``sigma = sigma' - alpha p_w I`` (tension positive stress, p_w compression positive);
-  with ``F = I + grad_n(du)`` it reads ``int grad_n(dv) . J sigma F^-T dOmega_n``;
-* continuity, backward Euler (compression positive p_w, Darcy flux
-  ``-(k/gamma_w) grad p_w``):
-  ``int dp [alpha (J - 1) + S (p - p_n)] dOmega_n + dt int grad(dp) . (k/gamma_w)
-  grad(p) dOmega_n = 0`` (drained edges by penalty);
-* the stress increment from the material's return mapping with the midpoint stretching
-  ``sym(grad_n(du) F_(1/2)^-1)`` (its volumetric part set to ``ln J`` so that the specific
-  volume follows the volume exactly) and the Hughes-Winget spin.
-
-Newton's method linearises ``J sigma F^-T``: the material's consistent tangent, the
-rotation of the effective stress by the spin and the change of area and orientation
-(the integrand and its tangent are :mod:`soil.weakform`'s, shared with the FEM
-reference); the only approximation is that the spin's
-rotation acts on sigma' at t_(n+1) rather than on the rotated start-of-step stress, a
-difference of the order of the strain increment. The linear solver and the reuse of its
-factorisation within a step are those of :mod:`soil.linear`. A step converges when the
-displacement residual is below ``TOLERANCE`` times the force scale (stress scale x nodal
-spacing) and the continuity residual below ``TOLERANCE`` times the volume scale (area x
-stress scale / P-wave modulus), each residual entry counted beyond its round-off level:
-the penalty forces on boundary rows are known only to ``eps x sum |terms|``
-(:func:`_roundoff`), which exceeds the tolerance on fine grids.
-A step that does not converge, inverts a background cell or fails in the material is cut
-back (halved) up to ``soil.coupling.MAX_CUTS`` times before the run stops with one clear
-error.
+Newton's method, the reuse of a factorisation within a step, the cut-backs and the scales
+are :mod:`soil.coupling`'s. A step converges when the displacement residual is below
+``TOLERANCE`` times the force scale and the continuity residual below ``TOLERANCE`` times
+the volume scale, each residual entry counted beyond its round-off level: the penalty
+forces on boundary rows are known only to ``eps x sum |terms|`` (:func:`_roundoff`),
+which exceeds the tolerance on fine grids. A step that does not converge, inverts a
+background cell or fails in the material is halved up to ``soil.coupling.MAX_CUTS``
+times before the run stops with one clear error.
 
 Material state lives on the nodes (the material points): at the start of a step the
 integration points take stress and state from the nodes by MLS interpolation, and after a
@@ -45,28 +31,24 @@ incompressible, the pore pressure is defined up to a constant: the mean change o
 the domain is then pinned to zero by one Lagrange multiplier.
 """
 
-import time
 from dataclasses import dataclass, replace
-from functools import cached_property
+from functools import cached_property, partial
 
 import numpy as np
 import scipy.sparse as sp
 
 from efg import vci
+from efg.quadrature import background
 from efg.assembly import Pattern, scatter
 from efg.boundary import (BOUNDARY_ORDER, boundary_points, conditions,
                           penalty_coefficients, segment_edges)
 from efg.mls import ShapeFunctions
-from efg.statics import background, cauchy_traction
 from soil import weakform
-from soil.bifurcation import restricted_eigenvalue
-from soil.coupling import (MAX_ITERATIONS, TOLERANCE, Scales, axial_strain, march,
-                           stretching_error)
-from soil.errors import ConvergenceError
-from soil.kinematics import invariants, prescribed_increment, strain_increment
-from soil.linear import factorise, identity, must_refactorise
+from soil.bifurcation import h1_gram, restricted_eigenvalue
+from soil.coupling import Scales, history_row, material_update, newton, run, timed
+from soil.kinematics import cauchy_traction, invariants, prescribed_increment
 from soil.case import EDGES
-from soil.results import Result, Snapshot
+from soil.results import Snapshot
 
 
 @dataclass
@@ -121,20 +103,10 @@ def solve(case, progress=True):
         Bad supports (too small a scale factor) and other invalid settings.
     """
     model = Model.build(case)
-    stats = {"factorisations": 0,
-             "timings": {"cells_s": 0.0, "shape_functions_s": 0.0, "assembly_s": 0.0,
-                         "solve_s": 0.0, "material_s": 0.0}}
-    tic = time.perf_counter()
-    history, snapshots = march(
-        case, _initial_points(model),
-        step=lambda points, t0, t1: _step(model, points, t0, t1, stats),
-        row=lambda points, t, dt, info: _history_row(model, points, t, dt, info),
-        snapshot=lambda points, t: _snapshot(model, points, t),
-        stats=stats, progress=progress, desc=f"efg {case.name}")
-    stats["timings"]["total_s"] = time.perf_counter() - tic
-    summary = {"steps": len(history), "dofs": 3 * len(case.nodes()), "tolerance": TOLERANCE,
-               "linear_solver": identity(), **stats, **_penalties(model, case.times())}
-    return Result(case, "efg", case.efg.to_dict(), history, snapshots, summary)
+    return run(case, "efg", case.efg.to_dict(), _initial_points(model),
+               partial(_step, model), partial(_history_row, model),
+               partial(_snapshot, model),
+               {"dofs": 3 * len(case.nodes()), **_penalties(model, case.times())}, progress)
 
 
 def _initial_points(model):
@@ -150,102 +122,121 @@ def _initial_points(model):
 
 
 def _step(model, points, t0, t1, stats):
-    """Newton iterations for one step; returns the new points, iterations, residual."""
-    case, dt = model.case, t1 - t0
+    """One step on the configuration of ``points``: new points, iterations, residual."""
     disc = _discretise(model, points.nodes, np.vstack([points.nodes, points.probes]),
                        stats["timings"])
-    n = len(points.nodes)
-    su = disc.su
-    stress_q = su.phi @ points.stress
-    state_q = {k: su.phi @ v for k, v in points.state.items()}
-    p_n_q = disc.sp.phi @ points.p
-    bc = disc.bc
-    du_bar = prescribed_increment(case.loading.L, disc.bp.points, dt)
-    alpha_u, alpha_p = _penalties(model, [0.0, dt]).values()
-    fluid = case.fluid
-    traction = (cauchy_traction(np.broadcast_to(model.scales.sigma0,
-                                                (len(disc.bp.weights), 4)),
-                                disc.bp.normal)
-                + bc.traction * bc.loaded * case.loading.factor(t1))
-    plate_force = case.plate_force(t1)
+    system = _System(model, points, disc, t0, t1, stats["timings"])
+    iterations, residual = newton(system, stats)
+    done = system.finish()
+    if model.case.diagnostics.uniqueness:
+        done.uniqueness = _uniqueness(model, disc, system.domain_tangent(), system.n)
+    return done, iterations, residual
 
-    du, p, plate = np.zeros(2 * n), points.p.copy(), points.plate
-    lam, lu, previous = 0.0, None, np.inf
-    for iteration in range(1, MAX_ITERATIONS + 1):
-        H = _gradient(su, du, n)
-        F = np.eye(2) + H
-        J = np.linalg.det(F)
-        if not np.all(J > 0):
-            raise ConvergenceError(f"a background cell inverts (J = {J.min():.3g})")
-        Finv = np.linalg.inv(F)
-        deps, dw = strain_increment(H, J)
-        tic = time.perf_counter()
-        stress, state, tangent = model.material.update(stress_q, state_q, deps, dw)
-        stats["timings"]["material_s"] += time.perf_counter() - tic
-        p_q = disc.sp.phi @ p
-        total = weakform.total_stress(stress, p_q, fluid)
-        grad_p = np.stack([disc.sp.dphi_dx @ p, disc.sp.dphi_dy @ p], 1)
-        r = weakform.residual(total, J, Finv, disc.w, p_q, p_n_q, grad_p, fluid, dt)
 
-        # residuals
-        tu, tp = disc.tu, disc.tp
-        R_u = np.concatenate([_tested(tu, r[:, f]) for f in range(2)])
-        ub = disc.sub.phi @ du.reshape(2, n).T                              # (G, 2)
-        gap = points.gap + ub - du_bar
+class _System:
+    """One step's Newton system (:func:`soil.coupling.newton`).
+
+    Unknowns ``[du (2n, fields blocked), p (n), plate settlement?, mean-pressure
+    multiplier?]``; :meth:`residual` keeps the iterate's stresses and tangent for
+    :meth:`tangent` and :meth:`finish`.
+    """
+
+    def __init__(self, model, points, disc, t0, t1, timings):
+        case, bc, su = model.case, disc.bc, disc.su
+        self.model, self.points, self.disc, self.timings = model, points, disc, timings
+        self.dt, self.n = t1 - t0, len(points.nodes)
+        self.stress_n = su.phi @ points.stress
+        self.state_n = {k: su.phi @ v for k, v in points.state.items()}
+        self.p_n = disc.sp.phi @ points.p
+        self.du_bar = prescribed_increment(case.loading.L, disc.bp.points, self.dt)
+        self.alpha_u, self.alpha_p = _penalties(model, [0.0, self.dt]).values()
+        self.traction = (cauchy_traction(model.scales.sigma0, disc.bp.normal)
+                         + bc.traction * bc.loaded * case.loading.factor(t1))
+        self.plate_force = case.plate_force(t1)
+        self.rigid_w = self.alpha_u * disc.bp.weights * bc.rigid
+        self.c_mean = disc.tp.phi.T @ disc.w
+        self.du, self.p, self.plate, self.lam = (np.zeros(2 * self.n), points.p.copy(),
+                                                 points.plate, 0.0)
+        extra = int(bc.rigid.any()) + int(model.scales.pin_pressure)
+        self.groups = np.concatenate([np.tile(np.arange(self.n), 3), np.full(extra, -1)])
+
+    def residual(self):
+        """``[R_u, R_p, plate?, pin?]`` at the iterate and its scaled size beyond
+        round-off."""
+        model, points, disc, n = self.model, self.points, self.disc, self.n
+        bc, fluid, alpha_u = disc.bc, model.case.fluid, self.alpha_u
+        (self.stress, self.state, self.material_tangent, self.J, self.Finv,
+         _) = material_update(model.material, self.stress_n, self.state_n,
+                              _gradient(disc.su, self.du, n), self.timings,
+                              "a background cell")
+        p_q = disc.sp.phi @ self.p
+        self.total = weakform.total_stress(self.stress, p_q, fluid)
+        grad_p = np.stack([disc.sp.dphi_dx @ self.p, disc.sp.dphi_dy @ self.p], 1)
+        r = weakform.residual(self.total, self.J, self.Finv, disc.w, p_q, self.p_n, grad_p,
+                              fluid, self.dt)
+
+        R_u = np.concatenate([_tested(disc.tu, r[:, f]) for f in range(2)])
+        ub = disc.sub.phi @ self.du.reshape(2, n).T                          # (G, 2)
+        self.gap = points.gap + ub - self.du_bar
         R_u += np.concatenate([disc.sub.phi.T @ (alpha_u * disc.bp.weights
-                                                  * bc.constrained[:, f] * gap[:, f])
+                                                  * bc.constrained[:, f] * self.gap[:, f])
                                for f in range(2)])
-        plate_gap = points.plate_gap + ub[:, 1] - (plate - points.plate)
-        rigid_w = alpha_u * disc.bp.weights * bc.rigid
-        R_u[n:] += disc.sub.phi.T @ (rigid_w * plate_gap)
-        R_u -= np.concatenate([disc.sub.phi.T @ (disc.bp.weights * traction[:, f])
+        self.plate_gap = points.plate_gap + ub[:, 1] - (self.plate - points.plate)
+        R_u[n:] += disc.sub.phi.T @ (self.rigid_w * self.plate_gap)
+        R_u -= np.concatenate([disc.sub.phi.T @ (disc.bp.weights * self.traction[:, f])
                                for f in range(2)])
-        R_p = _tested(tp, r[:, 2])
-        pb = disc.spb.phi @ p
-        R_p -= disc.spb.phi.T @ (alpha_p * disc.bp.weights * bc.drained * pb)
-        c_mean = tp.phi.T @ disc.w
+        R_p = _tested(disc.tp, r[:, 2])
+        pb = disc.spb.phi @ self.p
+        R_p -= disc.spb.phi.T @ (self.alpha_p * disc.bp.weights * bc.drained * pb)
         extra_R = []
         if bc.rigid.any():
-            extra_R.append(-np.sum(rigid_w * plate_gap) - plate_force)
-        if model.scales.pin_pressure:
-            R_p += c_mean * lam
-            extra_R.append(c_mean @ (p - points.p))
-        R = np.concatenate([R_u, R_p, extra_R])
+            extra_R.append(-np.sum(self.rigid_w * self.plate_gap) - self.plate_force)
         sc = model.scales
+        if sc.pin_pressure:
+            R_p += self.c_mean * self.lam
+            extra_R.append(self.c_mean @ (self.p - points.p))
         noise_u, noise_p, noise_plate = _roundoff(
-            disc, points, du.reshape(2, n).T, du_bar, p, plate, alpha_u, alpha_p, rigid_w)
+            disc, points, self.du.reshape(2, n).T, self.du_bar, self.p, self.plate, alpha_u,
+            self.alpha_p, self.rigid_w)
         residual = max(_excess(R_u, noise_u) / sc.force, _excess(R_p, noise_p) / sc.volume,
                        _excess(extra_R[:1], noise_plate) / sc.force * bc.rigid.any(),
                        np.abs(extra_R[-1:]).max(initial=0) / sc.volume * sc.pin_pressure)
-        if not np.isfinite(residual):
-            raise FloatingPointError("the residual is not finite")
-        if residual < TOLERANCE:
-            break
-        if iteration == MAX_ITERATIONS:
-            raise ConvergenceError(f"Newton residual {residual:.2e} after {iteration} "
-                                   "iterations")
+        return np.concatenate([R_u, R_p, extra_R]), residual
 
-        if must_refactorise(lu, residual, previous):      # tangent, then factorise it
-            tic = time.perf_counter()
-            K = _tangent(model, disc, stress, total, tangent, J, Finv, dt, alpha_u, alpha_p)
-            K = _bordered(K, disc, n, rigid_w, c_mean, model.scales.pin_pressure)
-            toc = time.perf_counter()
-            stats["timings"]["assembly_s"] += toc - tic
-            lu = factorise(K, groups=np.concatenate([np.tile(np.arange(n), 3),
-                                                     np.full(K.shape[0] - 3 * n, -1)]))
-            stats["factorisations"] += 1
-            stats["timings"]["solve_s"] += time.perf_counter() - toc
-        previous = residual
-        tic = time.perf_counter()
-        dx = lu.solve(-R)
-        stats["timings"]["solve_s"] += time.perf_counter() - tic
-        du, p, plate, lam = _advance(dx, du, p, plate, lam, n, bc, model)
+    def domain_tangent(self):
+        """The tangent of ``(ux, uy, p_w)`` at the iterate, penalties included."""
+        return _tangent(self.model, self.disc, self.stress, self.total,
+                        self.material_tangent, self.J, self.Finv, self.dt, self.alpha_u,
+                        self.alpha_p)
 
-    done = _finish(model, points, disc, du, p, plate, gap, plate_gap, dt)
-    if case.diagnostics.uniqueness:
-        K = _tangent(model, disc, stress, total, tangent, J, Finv, dt, alpha_u, alpha_p)
-        done.uniqueness = _uniqueness(model, disc, K, n)
-    return done, iteration, residual
+    def tangent(self):
+        """:meth:`domain_tangent` bordered by the plate and the pin, if any."""
+        return _bordered(self.domain_tangent(), self.disc, self.n, self.rigid_w,
+                         self.c_mean, self.model.scales.pin_pressure)
+
+    def advance(self, dx):
+        """Add a Newton correction ``dx = [du, p, plate?, lambda?]`` to the unknowns."""
+        n, extra = self.n, dx[3 * self.n:]
+        if self.disc.bc.rigid.any():
+            self.plate, extra = self.plate + extra[0], extra[1:]
+        if self.model.scales.pin_pressure:
+            self.lam += extra[0]
+        self.du, self.p = self.du + dx[:2 * n], self.p + dx[2 * n:3 * n]
+
+    def finish(self):
+        """Nodal update after convergence: state with D^I, positions, gaps, probes."""
+        points, disc, n = self.points, self.disc, self.n
+        at = disc.at_points
+        stress, state, _, _, _, deps = material_update(
+            self.model.material, points.stress, points.state,
+            _gradient(at.nodes, self.du, n), self.timings, "a node")
+        move = self.du.reshape(2, n).T
+        return Points(nodes=points.nodes + at.nodes.phi @ move, stress=stress, state=state,
+                      p=self.p, gap=np.where(disc.bc.constrained, self.gap, 0.0),
+                      plate=self.plate,
+                      plate_gap=np.where(disc.bc.rigid, self.plate_gap, 0.0),
+                      probes=points.probes + at.probes.phi @ move,
+                      stretching=deps / self.dt)
 
 
 def _tested(shape, r):
@@ -275,12 +266,12 @@ def _uniqueness(model, disc, K, n):
     the initial P-wave modulus: the displacement block (penalties included) on the
     undrained constraint (the pressure rows), against the H1 Gram matrix of the trial
     functions (length scale: the body's height)."""
-    su, W = disc.su, sp.diags(disc.w)
-    scalar = (su.dphi_dx.T @ W @ su.dphi_dx + su.dphi_dy.T @ W @ su.dphi_dy
-              + su.phi.T @ W @ su.phi / model.case.geometry.height**2)
+    su = disc.su
+    pattern = Pattern.build((su, su))
+    G = pattern.matrix(scatter(pattern, su, su, h1_gram(disc.w, model.case.geometry.height)),
+                       2, 2)
     K = sp.csr_matrix(K)
-    value = restricted_eigenvalue(K[:2 * n, :2 * n], K[2 * n:3 * n, :2 * n],
-                                  sp.block_diag([scalar, scalar]))
+    value = restricted_eigenvalue(K[:2 * n, :2 * n], K[2 * n:3 * n, :2 * n], G)
     return value / model.scales.modulus
 
 
@@ -290,9 +281,8 @@ def _roundoff(disc, points, du, du_bar, p, plate, alpha_u, alpha_p, rigid_w):
     A penalty force ``phi^T (alpha w gap)`` has ``alpha`` about ``penalty`` (1e6) times the
     stiffness, and its gap is a difference of displacements (or pressures) of the size of
     the step's increment; in floating point it is then known only to ``eps x sum |terms|``,
-    which grows as the spacing shrinks. At 3 x 10^4 nodes and a 0.2 % strain step this is
-    1.6e-8 of the force scale on the boundary rows, above :data:`TOLERANCE`; the residual
-    stalls at about half of it whatever the tangent.
+    which grows as the spacing shrinks and on fine grids exceeds ``TOLERANCE`` times the
+    force scale on the boundary rows, whatever the tangent.
     """
     eps, bc = np.finfo(float).eps, disc.bc
     phi_u, phi_p = disc.boundary_magnitudes
@@ -309,32 +299,6 @@ def _roundoff(disc, points, du, du_bar, p, plate, alpha_u, alpha_p, rigid_w):
 def _excess(R, noise):
     """Largest amount by which ``|R|`` exceeds its round-off level (0 when within it)."""
     return np.max(np.abs(R) - noise, initial=0.0)
-
-
-def _advance(dx, du, p, plate, lam, n, bc, model):
-    """Add a Newton correction ``dx = [du, p, plate?, lambda?]`` to the unknowns."""
-    extra = dx[3 * n:]
-    if bc.rigid.any():
-        plate, extra = plate + extra[0], extra[1:]
-    if model.scales.pin_pressure:
-        lam += extra[0]
-    return du + dx[:2 * n], p + dx[2 * n:3 * n], plate, lam
-
-
-def _finish(model, points, disc, du, p, plate, gap, plate_gap, dt):
-    """Nodal update after a converged step: state with D^I, positions, gaps, probes."""
-    n = len(points.nodes)
-    at = disc.at_points
-    H = _gradient(at.nodes, du, n)
-    J = np.linalg.det(np.eye(2) + H)
-    deps, dw = strain_increment(H, J)
-    stress, state, _ = model.material.update(points.stress, points.state, deps, dw)
-    move = du.reshape(2, n).T
-    return Points(nodes=points.nodes + at.nodes.phi @ move, stress=stress, state=state, p=p,
-                  gap=np.where(disc.bc.constrained, gap, 0.0), plate=plate,
-                  plate_gap=np.where(disc.bc.rigid, plate_gap, 0.0),
-                  probes=points.probes + at.probes.phi @ move,
-                  stretching=deps / dt)
 
 
 @dataclass
@@ -402,32 +366,30 @@ def _discretise(model, nodes, evaluation, timings):
     """Cells, shape functions (built once when u and p_w share their settings) and block
     patterns on the configuration ``nodes``; phase times added to ``timings``."""
     case, s = model.case, model.case.efg
-    tic = time.perf_counter()
-    quad = background(case, nodes, model.loop, s)
-    bp = boundary_points(nodes, model.loop, model.edges)
-    toc = time.perf_counter()
-    timings["cells_s"] += toc - tic
+    with timed(timings, "cells_s"):
+        quad = background(case, nodes, model.loop, s)
+        bp = boundary_points(nodes, model.loop, model.edges)
     same = (s.weight_u, s.scale_u) == (s.weight_p, s.scale_p)
 
     def build(points, field="u"):
         return ShapeFunctions.build(nodes, points, getattr(s, f"weight_{field}"),
                                     getattr(s, f"scale_{field}"), key=f"efg.scale_{field}")
 
-    su, sub = build(quad.points), build(bp.points)
-    sp_, spb = (su, sub) if same else (build(quad.points, "p"), build(bp.points, "p"))
-    tu, tp = su, sp_
-    if s.correction == "vci":
-        tu = vci.corrected(su, quad.weights, sub, bp.weights, bp.normal)
-        tp = tu if same else vci.corrected(sp_, quad.weights, spb, bp.weights, bp.normal)
-    at = build(evaluation)
-    n = len(nodes)
-    at_points = _AtPoints(_rows(at, slice(0, n)), _rows(at, slice(n, None)))
-    disc = _Discretisation(quad.weights, su, sp_, tu, tp, bp, sub, spb,
-                           conditions(case, bp), at_points, {})
-    tic = time.perf_counter()
-    timings["shape_functions_s"] += tic - toc
-    disc.patterns.update({name: Pattern.build(*pairs) for name, pairs in disc.blocks.items()})
-    timings["assembly_s"] += time.perf_counter() - tic
+    with timed(timings, "shape_functions_s"):
+        su, sub = build(quad.points), build(bp.points)
+        sp_, spb = (su, sub) if same else (build(quad.points, "p"), build(bp.points, "p"))
+        tu, tp = su, sp_
+        if s.correction == "vci":
+            tu = vci.corrected(su, quad.weights, sub, bp.weights, bp.normal)
+            tp = tu if same else vci.corrected(sp_, quad.weights, spb, bp.weights, bp.normal)
+        at = build(evaluation)
+        n = len(nodes)
+        at_points = _AtPoints(_rows(at, slice(0, n)), _rows(at, slice(n, None)))
+        disc = _Discretisation(quad.weights, su, sp_, tu, tp, bp, sub, spb,
+                               conditions(case, bp), at_points, {})
+    with timed(timings, "assembly_s"):
+        disc.patterns.update({name: Pattern.build(*pairs)
+                              for name, pairs in disc.blocks.items()})
     return disc
 
 
@@ -478,22 +440,19 @@ def _penalties(model, times):
 
 
 def _history_row(model, points, t, dt, info):
+    """:func:`soil.coupling.history_row` of the nodes (equal weights)."""
     case = model.case
-    p, q = invariants(points.stress)
     top = model.loop[model.edges == EDGES.index("top")]
-    probes = {}
+    probes = ()
     if len(points.probes):
         s = case.efg
         shape = ShapeFunctions.build(points.nodes, points.probes, s.weight_p, s.scale_p,
                                      key="efg.scale_p")
-        probes = {f"p_w@{pr.name}": v for pr, v in zip(case.probes, shape.phi @ points.p)}
-    x0 = case.nodes()[top]
-    return {"time": t, "eps_a": axial_strain(case, points.nodes[top, 1]), "p": p.mean(),
-            "q": q.mean(), "err": stretching_error(case, points.stretching[:, 1]),
-            "gamma": np.mean(points.nodes[top, 0] - x0[:, 0]) / case.geometry.height,
-            "dt": dt, "iterations": info["iterations"], "substeps": info["substeps"],
-            "residual": info["residual"], **probes,
-            **({"uniqueness": points.uniqueness} if case.diagnostics.uniqueness else {})}
+        probes = zip([pr.name for pr in case.probes], shape.phi @ points.p)
+    uniqueness = points.uniqueness if case.diagnostics.uniqueness else None
+    return history_row(case, t, dt, info, points.stress, points.stretching,
+                       points.nodes[top], case.nodes()[top], probes=probes,
+                       uniqueness=uniqueness)
 
 
 def _snapshot(model, points, t):

@@ -24,15 +24,9 @@ from efg.boundary import (boundary_points, conditions, load_vector, penalty_coef
                           segment_edges)
 from efg.mls import ShapeFunctions
 from soil.analytical import strain_from_stress
+from soil.kinematics import cauchy_traction
 from soil.errors import InputError
 from soil.results import Result, Snapshot
-
-
-def background(case, nodes, loop, settings):
-    """Integration points of the case's background cells in the current configuration."""
-    if settings.cells == "squares":
-        return quadrature.square_cells(nodes[loop], case.spacing, order=settings.order)
-    return quadrature.delaunay_cells(nodes, nodes[loop], order=settings.order)
 
 
 def penalty_factor(material, case, factor):
@@ -56,7 +50,7 @@ def solve(case):
     tic = time.perf_counter()
     nodes = case.nodes()
     loop = case.boundary_loop()
-    quad = background(case, nodes, loop, settings)
+    quad = quadrature.background(case, nodes, loop, settings)
     shape = ShapeFunctions.build(nodes, quad.points, settings.weight_u, settings.scale_u)
     bp = boundary_points(nodes, loop, segment_edges(nodes, loop, case.geometry))
     shape_b = ShapeFunctions.build(nodes, bp.points, settings.weight_u, settings.scale_u)
@@ -107,12 +101,6 @@ def boundary_data(case, bp, exact):
         u_bar[bc.kind == "exact"] = u_exact[bc.kind == "exact"]
         traction[bc.exact_traction] = cauchy_traction(s_exact, bp.normal)[bc.exact_traction]
     return bc.constrained, u_bar, traction, bc.loaded
-
-
-def cauchy_traction(stress, normal):
-    """``sigma n`` (G, 2) of stress-like vectors (G, 4) on unit normals (G, 2)."""
-    return np.stack([stress[:, 0] * normal[:, 0] + stress[:, 3] * normal[:, 1],
-                     stress[:, 3] * normal[:, 0] + stress[:, 1] * normal[:, 1]], axis=1)
 
 
 def _interpolate(shape, coefficients, n):

@@ -1,29 +1,20 @@
 """Updated-Lagrangian u-p FEM (scikit-fem): the reference for the EFG solver.
 
-The same scheme as ``efg/solver.py`` (design.md section 4), with finite elements; the
-integrand and its tangent are :mod:`soil.weakform`'s, shared with the EFG solver. A step
-from t_n to t_(n+1) is solved on the mesh at x_n (bases rebuilt there) for the
-displacement increment ``du`` and ``p_w`` at t_(n+1):
+The same scheme as ``efg/solver.py``, with finite elements. A step from t_n to t_(n+1) is
+solved on the mesh at x_n (bases rebuilt there) for the displacement increment ``du`` and
+``p_w`` at t_(n+1). Its integrand and consistent tangent are :mod:`soil.weakform`'s
+(equilibrium with ``J sigma F^-T`` on x_n, backward-Euler continuity), at the quadrature
+points, which are the material points (their state needs no remapping); the stress is the
+material's return mapping with the midpoint strain increment and the Hughes-Winget spin
+(:func:`soil.coupling.material_update`). The external load is the initial total stress
+``sigma0 . n`` on every boundary facet plus the edge traction x load factor on free
+components (a dead load on the start-of-step facets).
 
-* equilibrium, ``int grad_n(v) . J sigma F^-T dOmega_n = int v . t dGamma_n`` with
-  ``F = I + grad_n(du)``, ``sigma = sigma' - alpha p_w I`` (tension positive stress, p_w
-  compression positive); ``t`` is the initial total stress ``sigma0 . n`` on every
-  boundary facet plus the edge traction x load factor on free components (a dead load
-  on the start-of-step facets);
-* continuity, backward Euler: ``-int q [alpha (J - 1) + S (p - p_n)] dOmega_n
-  - dt (k/gamma_w) int grad(q) . grad(p) dOmega_n = 0``;
-* the stress from the material's return mapping with the midpoint strain increment and
-  the Hughes-Winget spin (:func:`soil.kinematics.strain_increment`), at the quadrature
-  points, which are the material points (their state needs no remapping).
-
-Newton's method starts from the last step's velocity x dt (``L x`` at the first step) and
-uses the exact tangent of :func:`soil.weakform.tangent` (material tangent, Jaumann
-rotation, change of area and orientation), pulled back to x_n gradients. Convergence,
-cut-back and scales are those of :mod:`soil.coupling`, shared with the EFG solver: the
-displacement residual below ``TOLERANCE`` times stress scale x spacing, the continuity
-residual below ``TOLERANCE`` times area x stress scale / P-wave modulus; a failing step
-(no convergence, an element with ``J <= 0``, a material failure) is halved up to
-``MAX_CUTS`` times before the run stops with one error naming the step time.
+Newton's method (:func:`soil.coupling.newton`) starts from the last step's velocity x dt
+(``L x`` at the first step). Convergence, cut-back and scales are those of
+:mod:`soil.coupling`, shared with the EFG solver; a failing step (no convergence, an
+element with ``J <= 0``, a material failure) is halved up to ``MAX_CUTS`` times before
+the run stops with one error naming the step time.
 
 Essential conditions are exact: fixed and prescribed displacement DOFs
 (``(exp(L dt) - I) x_n`` at the DOF's current position) and drained pressure DOFs
@@ -41,17 +32,15 @@ nodal spacing [m]. Their model has alpha = 1 and no storage; we keep their beta 
 alpha and S (on the Terzaghi column, alpha = 0.6, S = 0.0625, ``alpha^2 h^2 / (4 M)``
 leaves a 10 % first-step overshoot, ``h^2 / (4 M)`` 0.3 %).
 
-Linear solver: :mod:`soil.linear` (PARDISO when ``pypardiso`` is installed, with its
-default weighted matching, SuperLU otherwise) on the condensed, unsymmetric tangent, reused
-within a step (modified Newton) while it contracts the residual at least tenfold per
-iteration. PARDISO's node-blocked ordering without matching, which the EFG solver uses,
-was measured on the 10^4-node compression: faster for Taylor-Hood (analysis 0.47 s against
-0.82 s), but 7 Newton iterations instead of 5 for the unstable P1/P1 pair, so the
-reference keeps the default.
+Linear solver: :mod:`soil.linear` (PARDISO when ``pypardiso`` is installed, SuperLU otherwise) on the condensed, unsymmetric
+tangent, reused within a step (modified Newton) while it contracts the residual at least
+tenfold per iteration. PARDISO keeps its default ordering with weighted matching here, not
+the node-blocked ordering of the EFG solver, under which the unstable P1/P1 pair needs
+more Newton iterations.
 """
 
-import time
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import scipy.sparse as sp
@@ -59,13 +48,11 @@ import scipy.sparse as sp
 from fem_reference.assembly import Shapes, block
 from fem_reference.spaces import Space, cell_bases
 from soil import weakform
-from soil.bifurcation import restricted_eigenvalue
-from soil.coupling import (MAX_ITERATIONS, TOLERANCE, Scales, axial_strain, march,
-                           stretching_error)
-from soil.errors import ConvergenceError, InputError
-from soil.kinematics import in_plane, invariants, prescribed_increment, strain_increment
-from soil.linear import factorise, identity, must_refactorise
-from soil.results import Result, Snapshot
+from soil.bifurcation import h1_gram, restricted_eigenvalue
+from soil.coupling import Scales, history_row, material_update, newton, run, timed
+from soil.errors import InputError
+from soil.kinematics import cauchy_traction, invariants, prescribed_increment
+from soil.results import Snapshot
 
 
 @dataclass
@@ -192,26 +179,15 @@ def solve(case, method="fem-th", progress=True):
         A static case, or a quadrilateral method on a ``grid+centres`` case.
     """
     model = Model.build(case, method)
-    stats = {"factorisations": 0,
-             "timings": {"basis_s": 0.0, "assembly_s": 0.0, "solve_s": 0.0,
-                         "material_s": 0.0}}
-    tic = time.perf_counter()
-    history, snapshots = march(
-        case, _initial_state(model),
-        step=lambda current, t0, t1: _step(model, current, t0, t1, stats),
-        row=lambda current, t, dt, info: _history_row(model, current, t, dt, info),
-        snapshot=lambda current, t: _snapshot(model, current, t),
-        stats=stats, progress=progress, desc=f"{method} {case.name}")
-    stats["timings"]["total_s"] = time.perf_counter() - tic
     space = model.space
-    summary = {"steps": len(history), "dofs": int(2 * space.n_u + space.n_p),
-               "elements": int(space.mesh0.t.shape[1]), "tolerance": TOLERANCE,
-               "linear_solver": identity(), "stabilisation_beta": model.beta,
-               **stats}
-    options = {"elements": f"{space.pair.u_element.__name__}/"
-                           f"{space.pair.p_element.__name__}",
-               "intorder": space.pair.intorder, "stabilised": space.pair.stabilised}
-    return Result(case, method, options, history, snapshots, summary)
+    pair = space.pair
+    options = {"elements": f"{pair.u_element.__name__}/{pair.p_element.__name__}",
+               "intorder": pair.intorder, "stabilised": pair.stabilised}
+    return run(case, method, options, _initial_state(model), partial(_step, model),
+               partial(_history_row, model), partial(_snapshot, model),
+               {"dofs": int(2 * space.n_u + space.n_p),
+                "elements": int(space.mesh0.t.shape[1]), "stabilisation_beta": model.beta},
+               progress)
 
 
 def _initial_state(model):
@@ -236,93 +212,106 @@ class _Discretisation:
     external: np.ndarray     # (2 n_u,) boundary forces at t_(n+1) [force per thickness]
 
 
-def _discretise(model, vertices, t1):
+def _discretise(model, vertices, t1, timings):
+    """Bases on the mesh at ``vertices`` and the boundary forces at ``t1``; phase times
+    added to ``timings``."""
     space = model.space
-    mesh = space.moved(vertices)
-    ub, pb = cell_bases(mesh, space.pair)
-    external = np.zeros(2 * space.n_u)
-    factor = model.case.loading.factor(t1)
-    sigma0 = in_plane(model.scales.sigma0[None])[0]
-    for name, edge in model.case.boundary.items():
-        if len(space.edge_facets[name]) == 0:
-            continue
-        fb = space.facet_basis(mesh, name)
-        load = np.einsum("ij,jfq->fqi", sigma0, fb.normals)
-        loaded = np.array([edge.ux, edge.uy]) == "free"
-        load = load + loaded * np.asarray(edge.traction, float) * factor
-        external += Shapes.of(fb).vector(np.concatenate(
-            [(fb.dx[..., None] * load)[..., None], np.zeros(load.shape + (2,))], -1))
+    with timed(timings, "cells_s"):
+        mesh = space.moved(vertices)
+    with timed(timings, "shape_functions_s"):
+        ub, pb = cell_bases(mesh, space.pair)
+        external = np.zeros(2 * space.n_u)
+        factor = model.case.loading.factor(t1)
+        for name, edge in model.case.boundary.items():
+            if len(space.edge_facets[name]) == 0:
+                continue
+            fb = space.facet_basis(mesh, name)
+            load = cauchy_traction(model.scales.sigma0, np.moveaxis(fb.normals, 0, -1))
+            loaded = np.array([edge.ux, edge.uy]) == "free"
+            load = load + loaded * np.asarray(edge.traction, float) * factor
+            external += Shapes.of(fb).vector(np.concatenate(
+                [(fb.dx[..., None] * load)[..., None], np.zeros(load.shape + (2,))], -1))
     return _Discretisation(Shapes.of(ub), Shapes.of(pb), ub.dx, ub.doflocs, external)
 
 
 def _step(model, current, t0, t1, stats):
-    """Newton iterations for one step; returns the new state, iterations, residual."""
-    case, space, con = model.case, model.space, model.constraints
-    dt = t1 - t0
-    tic = time.perf_counter()
-    disc = _discretise(model, current.vertices, t1)
-    stats["timings"]["basis_s"] += time.perf_counter() - tic
-    n_u, E, Q = space.n_u, *disc.dx.shape
-    x = np.concatenate([current.velocity * dt, current.p])
-    x[con.prescribed] = prescribed_increment(
-        case.loading.L, disc.doflocs.T[con.prescribed % n_u], dt)[
-        np.arange(len(con.prescribed)), con.component]
-    x[con.drained] = 0.0
-    c_mean = np.zeros(len(x))
-    c_mean[2 * n_u:] = disc.p.vector(disc.dx[..., None, None] * [1.0, 0, 0])
-    lam, lu, previous = 0.0, None, np.inf
-    sc = model.scales
-    dw_u = disc.dx.ravel()
-    for iteration in range(1, MAX_ITERATIONS + 1):
-        grads = disc.u.values(x[:2 * n_u].reshape(2, n_u))[..., 1:].reshape(E * Q, 2, 2)
-        J = np.linalg.det(np.eye(2) + grads)
-        if not np.all(J > 0):
-            raise ConvergenceError(f"an element inverts (J = {J.min():.3g})")
-        Finv = np.linalg.inv(np.eye(2) + grads)
-        deps, dw = strain_increment(grads, J)
-        tic = time.perf_counter()
-        stress, state, tangent = model.material.update(current.stress, current.state,
-                                                       deps, dw)
-        stats["timings"]["material_s"] += time.perf_counter() - tic
-        R, total = _residual(model, disc, current, x, stress, J, Finv, dt)
-        R += lam * c_mean
+    """One step on the mesh at ``current.vertices``: new state, iterations, residual."""
+    disc = _discretise(model, current.vertices, t1, stats["timings"])
+    system = _System(model, current, disc, t0, t1, stats["timings"])
+    iterations, residual = newton(system, stats)
+    return system.finish(), iterations, residual
+
+
+class _System:
+    """One step's Newton system (:func:`soil.coupling.newton`) on the reduced unknowns.
+
+    The full unknowns ``x = [du_x, du_y, p]`` start from the predictor (the last step's
+    velocity x dt, essential values imposed); Newton corrects the free ones and the plate
+    through ``Constraints.T``, plus the mean-pressure multiplier when pinned.
+    """
+
+    def __init__(self, model, current, disc, t0, t1, timings):
+        case, con, n_u = model.case, model.constraints, model.space.n_u
+        self.model, self.current, self.disc, self.timings = model, current, disc, timings
+        self.dt, self.t1, self.n_u = t1 - t0, t1, n_u
+        x = np.concatenate([current.velocity * self.dt, current.p])
+        x[con.prescribed] = prescribed_increment(
+            case.loading.L, disc.doflocs.T[con.prescribed % n_u], self.dt)[
+            np.arange(len(con.prescribed)), con.component]
+        x[con.drained] = 0.0
+        self.x, self.lam = x, 0.0
+        self.c_mean = np.zeros(len(x))
+        self.c_mean[2 * n_u:] = disc.p.vector(disc.dx[..., None, None] * [1.0, 0, 0])
+        self.groups = None
+
+    def residual(self):
+        """The reduced residual (plus the pin) and its scaled size."""
+        model, disc, con, n_u = self.model, self.disc, self.model.constraints, self.n_u
+        E, Q = disc.dx.shape
+        grads = disc.u.values(self.x[:2 * n_u].reshape(2, n_u))[..., 1:]
+        (self.stress, self.state, self.material_tangent, self.J, self.Finv,
+         self.deps) = material_update(model.material, self.current.stress,
+                                      self.current.state, grads.reshape(E * Q, 2, 2),
+                                      self.timings, "an element")
+        R, self.total = _residual(model, disc, self.current, self.x, self.stress, self.J,
+                                  self.Finv, self.dt)
+        R += self.lam * self.c_mean
         reduced = con.T.T @ R
         if len(con.plate):
-            reduced[-1] -= case.plate_force(t1)
-        pin = c_mean @ (x - np.concatenate([np.zeros(2 * n_u), current.p]))
+            reduced[-1] -= model.case.plate_force(self.t1)
+        sc = model.scales
+        pin = self.c_mean @ (self.x - np.concatenate([np.zeros(2 * n_u), self.current.p]))
         residual = _norm(reduced, con, sc.force, sc.volume, sc.pin_pressure * pin)
-        if not np.isfinite(residual):
-            raise FloatingPointError("the residual is not finite")
-        if residual < TOLERANCE:
-            break
-        if iteration == MAX_ITERATIONS:
-            raise ConvergenceError(f"Newton residual {residual:.2e} after {iteration} "
-                                   "iterations")
-        tic = time.perf_counter()
-        if must_refactorise(lu, residual, previous):
-            K = _tangent(model, disc, stress, total, tangent, J, Finv, dt)
-            K = _bordered(con.T.T @ K @ con.T, con.T.T @ c_mean, sc.pin_pressure)
-            toc = time.perf_counter()
-            stats["timings"]["assembly_s"] += toc - tic
-            tic = toc
-            lu = factorise(K)
-            stats["factorisations"] += 1
-        previous = residual
-        rhs = np.append(reduced, pin) if sc.pin_pressure else reduced
-        dz = -lu.solve(rhs)
-        stats["timings"]["solve_s"] += time.perf_counter() - tic
-        x += con.T @ dz[:con.T.shape[1]]
-        if sc.pin_pressure:
-            lam += dz[-1]
+        return (np.append(reduced, pin) if sc.pin_pressure else reduced), residual
 
-    n_v = len(current.vertices)
-    du = x[:2 * n_u].reshape(2, n_u)[:, :n_v].T
-    uniqueness = 0.0
-    if case.diagnostics.uniqueness:
-        K = con.T.T @ _tangent(model, disc, stress, total, tangent, J, Finv, dt) @ con.T
-        uniqueness = _uniqueness(model, disc, K)
-    return State(current.vertices + du, stress, state, x[2 * n_u:], dw_u * J,
-                 deps / dt, x[:2 * n_u] / dt, uniqueness), iteration, residual
+    def domain_tangent(self):
+        """The tangent of the reduced unknowns (essential conditions eliminated)."""
+        T = self.model.constraints.T
+        return T.T @ _tangent(self.model, self.disc, self.stress, self.total,
+                              self.material_tangent, self.J, self.Finv, self.dt) @ T
+
+    def tangent(self):
+        """:meth:`domain_tangent` bordered by the mean-pressure pin, if any."""
+        return _bordered(self.domain_tangent(), self.model.constraints.T.T @ self.c_mean,
+                         self.model.scales.pin_pressure)
+
+    def advance(self, dx):
+        """Add a Newton correction of the reduced unknowns (and the multiplier)."""
+        T = self.model.constraints.T
+        self.x += T @ dx[:T.shape[1]]
+        if self.model.scales.pin_pressure:
+            self.lam += dx[-1]
+
+    def finish(self):
+        """The state after convergence (the quadrature points are the material points)."""
+        current, n_u, x = self.current, self.n_u, self.x
+        du = x[:2 * n_u].reshape(2, n_u)[:, :len(current.vertices)].T
+        uniqueness = 0.0
+        if self.model.case.diagnostics.uniqueness:
+            uniqueness = _uniqueness(self.model, self.disc, self.domain_tangent())
+        return State(current.vertices + du, self.stress, self.state, x[2 * n_u:],
+                     self.disc.dx.ravel() * self.J, self.deps / self.dt,
+                     x[:2 * n_u] / self.dt, uniqueness)
 
 
 def _residual(model, disc, current, x, stress, J, Finv, dt):
@@ -359,10 +348,7 @@ def _uniqueness(model, disc, K):
     the displacement block on the undrained constraint (the free pressure rows), against
     the H1 Gram matrix of the displacement basis (length scale: the body's height)."""
     E, Q = disc.dx.shape
-    gram = np.zeros((E, Q, 2, 3, 2, 3))
-    for f in range(2):
-        gram[:, :, f, 0, f, 0] = disc.dx / model.case.geometry.height**2
-        gram[:, :, f, 1, f, 1] = gram[:, :, f, 2, f, 2] = disc.dx
+    gram = h1_gram(disc.dx.ravel(), model.case.geometry.height).reshape(E, Q, 2, 3, 2, 3)
     con = model.constraints
     u = con.T[:, con.is_u][:2 * model.space.n_u]
     G = u.T @ block(disc.u, disc.u, gram) @ u
@@ -386,21 +372,16 @@ def _norm(reduced, con, force, volume, pin):
 
 
 def _history_row(model, current, t, dt, info):
-    """One row of the history: the EFG columns, domain averages weighted by volume."""
+    """:func:`soil.coupling.history_row` of the quadrature points (weighted by volume)."""
     case = model.case
-    p, q = invariants(current.stress)
-    w = current.weights / current.weights.sum()
     top = model.space.mesh0.p[1] > case.geometry.height * (1 - 1e-9)
-    probes = {}
+    probes = ()
     if model.probes is not None:
-        probes = {f"p_w@{pr.name}": v for pr, v in zip(case.probes, model.probes @ current.p)}
-    x0 = model.space.mesh0.p[0, top]
-    return {"time": t, "eps_a": axial_strain(case, current.vertices[top, 1]), "p": w @ p,
-            "q": w @ q, "err": stretching_error(case, current.stretching[:, 1], w),
-            "gamma": np.mean(current.vertices[top, 0] - x0) / case.geometry.height,
-            "dt": dt, "iterations": info["iterations"], "substeps": info["substeps"],
-            "residual": info["residual"], **probes,
-            **({"uniqueness": current.uniqueness} if case.diagnostics.uniqueness else {})}
+        probes = zip([pr.name for pr in case.probes], model.probes @ current.p)
+    return history_row(case, t, dt, info, current.stress, current.stretching,
+                       current.vertices[top], model.space.mesh0.p.T[top],
+                       current.weights / current.weights.sum(), probes,
+                       current.uniqueness if case.diagnostics.uniqueness else None)
 
 
 def _snapshot(model, current, t):

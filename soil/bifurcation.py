@@ -55,9 +55,9 @@ def restricted_eigenvalue(K, B, G):
     ------
     InputError
         Beyond :data:`DENSE_LIMIT` unknowns. (Shift-invert Lanczos on the saddle-point
-        pencil ``[[sym K, B^T], [B, 0]] - lambda [[G, 0], [0, 0]]`` was tried: on the
-        Taylor-Hood unconfined compression it missed the smallest eigenvalue on 3 of 25
-        steps, so it is not offered.)
+        pencil ``[[sym K, B^T], [B, 0]] - lambda [[G, 0], [0, 0]]`` is not a sparse
+        alternative: it can miss the smallest eigenvalue, as on 3 of 25 steps of the
+        Taylor-Hood unconfined compression.)
 
     Examples
     --------
@@ -72,6 +72,33 @@ def restricted_eigenvalue(K, B, G):
             f"{K.shape[0]} displacement unknowns, more than the {DENSE_LIMIT} it is computed "
             "for densely: coarsen the discretisation or set diagnostics.uniqueness = false")
     return _dense(_array(K), _array(B), _array(G))
+
+
+def h1_gram(weights, length):
+    """Integrand of the H1 inner product of displacement fields, the Gram matrix ``G`` of
+    :func:`restricted_eigenvalue`.
+
+    ``(u, v) = int (u . v / length^2 + grad u : grad v) dOmega``, as coefficients
+    ``c[m, f, s, g, t]`` of the test field f, slot s (value, d/dx, d/dy) and the trial
+    field g, slot t, the layout of :mod:`soil.weakform`.
+
+    Parameters
+    ----------
+    weights : ndarray, shape (M,)
+        Integration weights [m2].
+    length : float
+        The length that makes the value term commensurate with the gradient term [m]
+        (the solvers use the body's height).
+
+    Returns
+    -------
+    ndarray, shape (M, 2, 3, 2, 3)
+    """
+    c = np.zeros((len(weights), 2, 3, 2, 3))
+    for f in range(2):
+        c[:, f, 0, f, 0] = weights / length**2
+        c[:, f, 1, f, 1] = c[:, f, 2, f, 2] = weights
+    return c
 
 
 def _array(A):

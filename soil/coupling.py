@@ -1,11 +1,21 @@
-"""What both coupled solvers share: scales, tolerances, time marching with cut-backs.
+"""What both coupled solvers share: the run, the Newton step and the history it records.
 
-The EFG and FEM solvers differ in how they discretise a step; everything around the step
-is here: the initial total stress and the residual scales a step converges against, the
-rule that pins the mean pore pressure of a confined undrained body, and the march over the
-case's time levels that halves a failing step up to :data:`MAX_CUTS` times.
+The EFG and FEM solvers differ only in how they discretise a step (shape functions or
+bases, cells, assembly, essential conditions); everything around that is here:
+
+* :class:`Scales`: the initial total stress, the residual scales a step converges against
+  and the rule that pins the mean pore pressure of a confined undrained body;
+* :func:`run`: the run template (timers, the march, the summary every result carries);
+* :func:`march`: the case's time levels, a failing level halved up to :data:`MAX_CUTS`
+  times;
+* :func:`newton`: Newton's method on one step, reusing a factorisation while it
+  contracts (:func:`soil.linear.must_refactorise`);
+* :func:`material_update`: kinematics and the material's return mapping at the points;
+* :func:`history_row`: the columns of a history row.
 """
 
+import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -13,13 +23,19 @@ import pandas as pd
 from tqdm import tqdm
 
 from soil.errors import ConvergenceError
-from soil.kinematics import IDENTITY
+from soil.kinematics import IDENTITY, invariants, strain_increment
+from soil.linear import factorise, identity, must_refactorise
+from soil.results import Result
 
 #: Newton tolerance on the scaled residuals (see :class:`Scales`).
 TOLERANCE = 1e-8
 MAX_ITERATIONS = 25
 #: Halvings of a failing time step before the run stops.
 MAX_CUTS = 6
+#: Phase timers of a run [s], ``summary["timings"]`` of both methods (plus ``total_s``):
+#: background cells or mesh geometry, shape functions or bases, assembly of the tangent
+#: (and of sparsity patterns), factorisations and back-solves, material updates.
+TIMERS = ("cells_s", "shape_functions_s", "assembly_s", "solve_s", "material_s")
 
 
 @dataclass(frozen=True)
@@ -73,6 +89,206 @@ class Scales:
     def volume(self):
         """Residual scale of continuity [volume per unit thickness]."""
         return self.stress * self.h**2 / self.modulus
+
+
+@contextmanager
+def timed(timings, key):
+    """Add the wall time of the ``with`` block to ``timings[key]`` [s]."""
+    tic = time.perf_counter()
+    yield
+    timings[key] += time.perf_counter() - tic
+
+
+def run(case, method, options, current, step, row, snapshot, summary, progress=True):
+    """The run template of both coupled solvers: march, time, summarise.
+
+    Parameters
+    ----------
+    case : Case
+    method : str
+        ``efg`` or an FEM pair; it names the result and the progress bar.
+    options : dict
+        The method's settings, stored with the result.
+    current : object
+        The solver's state at t = 0.
+    step : callable
+        ``step(current, t0, t1, stats) -> (current, iterations, residual)``, adding to
+        ``stats["timings"]`` (keys :data:`TIMERS`) and ``stats["factorisations"]``.
+    row, snapshot : callable
+        As in :func:`march`.
+    summary : dict
+        The method's own summary entries (unknowns, penalties, ...).
+
+    Returns
+    -------
+    Result
+        Its summary holds ``steps``, ``tolerance``, ``linear_solver``, ``summary``, the
+        statistics of :func:`march`, ``factorisations`` and ``timings``.
+    """
+    stats = {"factorisations": 0, "timings": dict.fromkeys(TIMERS, 0.0)}
+    tic = time.perf_counter()
+    history, snapshots = march(case, current, lambda c, t0, t1: step(c, t0, t1, stats),
+                               row, snapshot, stats, progress, desc=f"{method} {case.name}")
+    stats["timings"]["total_s"] = time.perf_counter() - tic
+    return Result(case, method, options, history, snapshots,
+                  {"steps": len(history), "tolerance": TOLERANCE,
+                   "linear_solver": identity(), **summary, **stats})
+
+
+def newton(system, stats):
+    """Newton's method on one step's nonlinear system.
+
+    Parameters
+    ----------
+    system : object
+        The step's unknowns and equations, with
+
+        * ``residual() -> (R, scaled)``: the residual vector at the current iterate and
+          its size in units of the tolerance's scales (:class:`Scales`);
+        * ``tangent() -> K``: the sparse Jacobian of ``R`` at the current iterate;
+        * ``groups``: the node of each unknown for :func:`soil.linear.factorise` (or
+          None);
+        * ``advance(dx)``: add a correction to the unknowns.
+    stats : dict
+        ``factorisations`` and ``timings`` (``assembly_s``, ``solve_s``) are added to.
+
+    Returns
+    -------
+    iterations : int
+        Residual evaluations, the converged one included.
+    residual : float
+        The converged scaled residual (< :data:`TOLERANCE`).
+
+    Raises
+    ------
+    ConvergenceError
+        No convergence in :data:`MAX_ITERATIONS` iterations.
+    FloatingPointError
+        A residual that is not finite.
+
+    Examples
+    --------
+    ``x^2 = 2`` from ``x = 1``; the first factorisation is reused while it contracts the
+    residual tenfold per iteration:
+
+    >>> import scipy.sparse as sp
+    >>> class Root:
+    ...     groups, x = None, np.array([1.0])
+    ...     def residual(self):
+    ...         return self.x**2 - 2, abs(self.x[0]**2 - 2)
+    ...     def tangent(self):
+    ...         return sp.csr_matrix(2 * self.x[None])
+    ...     def advance(self, dx):
+    ...         self.x = self.x + dx
+    >>> root, stats = Root(), {"factorisations": 0, "timings": dict.fromkeys(TIMERS, 0.0)}
+    >>> iterations, residual = newton(root, stats)
+    >>> round(float(root.x[0]), 8), stats["factorisations"], bool(residual < TOLERANCE)
+    (1.41421356, 2, True)
+    """
+    lu, previous = None, np.inf
+    for iteration in range(1, MAX_ITERATIONS + 1):
+        R, residual = system.residual()
+        if not np.isfinite(residual):
+            raise FloatingPointError("the residual is not finite")
+        if residual < TOLERANCE:
+            return iteration, residual
+        if iteration == MAX_ITERATIONS:
+            raise ConvergenceError(f"Newton residual {residual:.2e} after {iteration} "
+                                   "iterations")
+        if must_refactorise(lu, residual, previous):
+            with timed(stats["timings"], "assembly_s"):
+                K = system.tangent()
+            with timed(stats["timings"], "solve_s"):
+                lu = factorise(K, groups=system.groups)
+            stats["factorisations"] += 1
+        previous = residual
+        with timed(stats["timings"], "solve_s"):
+            dx = lu.solve(-R)
+        system.advance(dx)
+
+
+def material_update(material, stress, state, H, timings, where="an integration point"):
+    """Kinematics and the material's return mapping over a step, at many points.
+
+    Parameters
+    ----------
+    material : Material
+    stress, state : ndarray (P, 4), dict
+        Effective stress (tension positive) and material state at the start of the step.
+    H : ndarray, shape (P, 2, 2)
+        ``grad_n(du)``: the step's displacement gradient on the start-of-step
+        configuration, ``H[p, i, j] = d du_i / d x_j``.
+    timings : dict
+        ``material_s`` is added to.
+    where : str
+        What a point is, for the message of an inverted point.
+
+    Returns
+    -------
+    stress, state, tangent
+        The material's update (:meth:`update`) with the strain and spin increments of
+        :func:`soil.kinematics.strain_increment`.
+    J : ndarray, shape (P,)
+        ``det F``, ``F = I + H``.
+    Finv : ndarray, shape (P, 2, 2)
+    deps : ndarray, shape (P, 4)
+        The strain increment (Voigt).
+
+    Raises
+    ------
+    ConvergenceError
+        Where ``J <= 0`` (the step inverts ``where``).
+    """
+    F = np.eye(2) + H
+    J = np.linalg.det(F)
+    if not np.all(J > 0):
+        raise ConvergenceError(f"{where} inverts (J = {J.min():.3g})")
+    Finv = np.linalg.inv(F)
+    deps, dw = strain_increment(H, J)
+    with timed(timings, "material_s"):
+        stress, state, tangent = material.update(stress, state, deps, dw)
+    return stress, state, tangent, J, Finv, deps
+
+
+def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, probes=(),
+                uniqueness=None):
+    """One row of a coupled run's history.
+
+    Parameters
+    ----------
+    case : Case
+    t, dt : float
+        The level's time and step [s].
+    info : dict
+        ``iterations``, ``substeps`` and ``residual`` of the level (:func:`march`).
+    stress, stretching : ndarray, shape (P, 4)
+        Effective stress (tension positive) and last stretching [1/s] at the material
+        points.
+    top, top0 : ndarray, shape (T, 2)
+        Current and initial positions of the top edge's nodes [m].
+    weights : ndarray, shape (P,), optional
+        Weights of the domain averages (current volumes); equal weights by default.
+    probes : iterable of (str, float)
+        Probe name and its pore pressure [kPa].
+    uniqueness : float, optional
+        The :mod:`soil.bifurcation` indicator of the level, if asked for.
+
+    Returns
+    -------
+    dict
+        ``time``, ``eps_a`` (:func:`axial_strain`), ``p`` and ``q`` (domain averages of
+        p', q [kPa]), ``err`` (:func:`stretching_error`), ``gamma`` (mean horizontal
+        displacement of the top over the height), ``dt``, ``iterations``, ``substeps``,
+        ``residual``, ``p_w@NAME`` per probe and, if given, ``uniqueness``.
+    """
+    p, q = invariants(stress)
+    return {"time": t, "eps_a": axial_strain(case, top[:, 1]),
+            "p": np.average(p, weights=weights), "q": np.average(q, weights=weights),
+            "err": stretching_error(case, stretching[:, 1], weights),
+            "gamma": np.mean(top[:, 0] - top0[:, 0]) / case.geometry.height,
+            "dt": dt, "iterations": info["iterations"], "substeps": info["substeps"],
+            "residual": info["residual"], **{f"p_w@{name}": v for name, v in probes},
+            **({} if uniqueness is None else {"uniqueness": uniqueness})}
 
 
 def march(case, current, step, row, snapshot, stats, progress=True, desc=""):

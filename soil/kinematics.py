@@ -110,6 +110,21 @@ def in_plane(stress):
                      np.stack([stress[:, 3], stress[:, 1]], 1)], 1)
 
 
+def cauchy_traction(stress, normal):
+    """The traction ``sigma n`` (..., 2) of stress-like vectors (..., 4) on unit normals
+    (..., 2), leading axes broadcast.
+
+    Examples
+    --------
+    >>> cauchy_traction(np.array([-2.0, -1.0, -1.0, 0.5]), np.array([[0.0, 1.0]]))
+    array([[ 0.5, -1. ]])
+    """
+    stress, normal = np.asarray(stress), np.asarray(normal)
+    return np.stack([stress[..., 0] * normal[..., 0] + stress[..., 3] * normal[..., 1],
+                     stress[..., 3] * normal[..., 0] + stress[..., 1] * normal[..., 1]],
+                    axis=-1)
+
+
 def strain_increment(H, J):
     """Midpoint stretching increment and spin of a step from its displacement gradient.
 

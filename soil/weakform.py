@@ -1,7 +1,7 @@
 """The coupled u-p weak form at integration points, the one home of its integrand.
 
 Both solvers discretise the same two equations on the start-of-step configuration x_n
-(updated Lagrangian, backward Euler; design.md section 4), for the displacement increment
+(updated Lagrangian, backward Euler), for the displacement increment
 ``du`` (``F = I + grad_n(du)``, ``J = det F``) and the pore pressure ``p`` at t_(n+1):
 
 * momentum, ``int grad_n(v) : J sigma F^-T dOmega_n`` (minus the external work), with
@@ -67,7 +67,9 @@ def tangent(C, effective, total, J, Finv, w, fluid, dt, beta=0.0):
     Jaumann rotation of sigma', change of area and orientation) pulled back to x_n
     gradients; the coupling ``-alpha J F^-T``; storage ``-S`` and flow ``-(dt k/gamma_w +
     beta)``. Arguments as in :func:`residual`, with C the material's consistent tangent
-    (M, 4, 4) and ``effective`` the effective stress (M, 4).
+    (M, 4, 4) and ``effective`` the effective stress (M, 4). The one approximation: the
+    Jaumann rotation acts on sigma' at t_(n+1) rather than on the rotated start-of-step
+    stress, a difference of the order of the strain increment.
     """
     wJ = w * J
     A = spatial_tangent(C, in_plane(effective), in_plane(total))
