@@ -1,6 +1,6 @@
 """Finite-strain Cam-clay, original (Sekiguchi-Ohta form) and modified, on arrays of points.
 
-Rate form on the current configuration (design.md section 3): the Jaumann rate of the
+Rate form on the current configuration: the Jaumann rate of the
 Cauchy effective stress is ``C^ep : D``. Hypoelasticity with ``K = v p'/kappa`` and a
 constant Poisson ratio (or, optionally, a constant shear modulus ``G``); associated flow.
 
@@ -23,12 +23,13 @@ import numpy as np
 from soil.errors import ConvergenceError, require
 from soil.kinematics import (DEVIATORIC, IDENTITY, deviator, double_dot, hughes_winget,
                              invariants)
+from soil.material import Material
 
 MODELS = ("original", "modified")
 
 
 @dataclass(frozen=True)
-class CamClay:
+class CamClay(Material):
     """Finite-strain Cam-clay parameters and its vectorised stress update.
 
     Parameters
@@ -124,11 +125,6 @@ class CamClay:
         if self.G is not None:
             return K, np.full_like(K, self.G)
         return K, 1.5 * (1 - 2 * self.nu) / (1 + self.nu) * K
-
-    def constrained_modulus(self, p=None, v=None):
-        """P-wave (oedometric) modulus ``K + 4G/3`` at p' and v (default: initial)."""
-        K, G = self.moduli(p, v)
-        return K + 4 * G / 3
 
     def hardening(self, v):
         """``theta`` in ``dp'c / p'c = theta d eps_v^p`` (compression positive)."""

@@ -271,7 +271,7 @@ def continuum_path(material, test, strain, points=200):
 
 
 def closed_form_q(clay, p):
-    """Undrained q at p' on the plastic part of a path from isotropic p'0 (design.md 3).
+    """Undrained q at p' on the plastic part of a path from isotropic p'0.
 
     Original Cam-clay (normally consolidated): ``q/(M p') = ln(p'0/p') / Lambda``;
     modified: ``p'/p'0 = [OCR M^2/(M^2 + eta^2)]^Lambda`` solved for ``q = eta p'``.

@@ -12,10 +12,11 @@ import numpy as np
 
 from soil.errors import require
 from soil.kinematics import DEVIATORIC, IDENTITY, hughes_winget
+from soil.material import Material
 
 
 @dataclass(frozen=True)
-class LinearElastic:
+class LinearElastic(Material):
     """Isotropic linear elasticity.
 
     Parameters
@@ -62,11 +63,6 @@ class LinearElastic:
     def moduli(self, p=None, v=None):
         """Bulk and shear moduli ``(K, G)``, the same in every state."""
         return self.K, self.G
-
-    def constrained_modulus(self, p=None, v=None):
-        """P-wave (oedometric) modulus ``K + 4G/3``."""
-        K, G = self.moduli(p, v)
-        return K + 4 * G / 3
 
     @property
     def stiffness(self):

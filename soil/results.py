@@ -120,7 +120,7 @@ class Snapshot:
 
 @dataclass
 class Result:
-    """What every solver returns and ``soilwater run`` writes (design.md section 6).
+    """What every solver returns and ``soilwater run`` writes.
 
     Parameters
     ----------
