@@ -179,6 +179,23 @@ def _parser():
     p.add_argument("--out", required=True, help="CSV file: step, eps_a, eps_v, p, q, pc")
     p.set_defaults(func=_path)
 
+    p = sub.add_parser("infsup", help="numerical inf-sup test of element pairs and EFG "
+                       "weight settings on a unit square",
+                       description="The Chapelle-Bathe inf-sup test on n x n grid nodes "
+                       "of a unit square, with each method's own shape functions and "
+                       "quadrature; writes FILE.csv and a log-log figure FILE.png of "
+                       "beta against h with the slope of each pair.")
+    p.add_argument("--methods", default="fem-th,fem-p1p1,efg",
+                   help="comma-separated: efg and FEM pairs (default fem-th,fem-p1p1,efg)")
+    p.add_argument("--sizes", default="5,9,17,33",
+                   help="comma-separated nodes per side, >= 3 (default 5,9,17,33)")
+    p.add_argument("--boundary", choices=["free", "dirichlet"],
+                   help="displacement boundary: free, or v = 0 (default: both)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="EFG settings, e.g. efg.weight_u=exp:0.5 (repeatable)")
+    p.add_argument("--out", required=True, metavar="FILE.csv", help="CSV table")
+    p.set_defaults(func=_infsup)
+
     p = sub.add_parser("check", help="rerun the fast subset and compare with "
                        "reports/reference/ (exit 1 on a regression)")
     p.add_argument("--update", action="store_true",
@@ -259,6 +276,20 @@ def _path(args):
     table = run_test(material, args.test, args.strain, points=args.points)
     write_csv(table, args.out)
     print(f"wrote {args.out} ({len(table)} rows)")
+
+
+def _infsup(args):
+    from comparisons.infsup import BOUNDARIES, write
+
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    try:
+        sizes = [int(n) for n in args.sizes.split(",")]
+    except ValueError:
+        raise SoilwaterError(f"--sizes {args.sizes!r}: give comma-separated integers, "
+                             "e.g. 5,9,17,33") from None
+    boundaries = [args.boundary] if args.boundary else list(BOUNDARIES)
+    for path in write(args.out, methods, sizes, boundaries, args.set):
+        print(f"wrote {path}")
 
 
 def _check(args):

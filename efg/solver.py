@@ -84,6 +84,13 @@ class Model:
         return cls(case, material, loop, segment_edges(case.nodes(), loop, case.geometry),
                    Scales.of(case, material))
 
+    @property
+    def beta(self):
+        """Coefficient of the flow-equation perturbation [m2/kPa] with
+        ``efg.stabilisation = "perturbation"``, else 0."""
+        perturbed = self.case.efg.stabilisation == "perturbation"
+        return self.scales.perturbation if perturbed else 0.0
+
 
 def solve(case, progress=True):
     """Run a coupled case with EFG and return its :class:`~soil.results.Result`.
@@ -106,7 +113,8 @@ def solve(case, progress=True):
     return run(case, "efg", case.efg.to_dict(), _initial_points(model),
                partial(_step, model), partial(_history_row, model),
                partial(_snapshot, model),
-               {"dofs": 3 * len(case.nodes()), **_penalties(model, case.times())}, progress)
+               {"dofs": 3 * len(case.nodes()), "stabilisation_beta": model.beta,
+                **_penalties(model, case.times())}, progress)
 
 
 def _initial_points(model):
@@ -148,6 +156,7 @@ class _System:
         self.stress_n = su.phi @ points.stress
         self.state_n = {k: su.phi @ v for k, v in points.state.items()}
         self.p_n = disc.sp.phi @ points.p
+        self.grad_p_n = np.stack([disc.sp.dphi_dx @ points.p, disc.sp.dphi_dy @ points.p], 1)
         self.du_bar = prescribed_increment(case.loading.L, disc.bp.points, self.dt)
         self.alpha_u, self.alpha_p = _penalties(model, [0.0, self.dt]).values()
         self.traction = (cauchy_traction(model.scales.sigma0, disc.bp.normal)
@@ -173,7 +182,7 @@ class _System:
         self.total = weakform.total_stress(self.stress, p_q, fluid)
         grad_p = np.stack([disc.sp.dphi_dx @ self.p, disc.sp.dphi_dy @ self.p], 1)
         r = weakform.residual(self.total, self.J, self.Finv, disc.w, p_q, self.p_n, grad_p,
-                              fluid, self.dt)
+                              fluid, self.dt, model.beta, self.grad_p_n)
 
         R_u = np.concatenate([_tested(disc.tu, r[:, f]) for f in range(2)])
         ub = disc.sub.phi @ self.du.reshape(2, n).T                          # (G, 2)
@@ -253,7 +262,8 @@ def _tangent(model, disc, stress, total, tangent, J, Finv, dt, alpha_u, alpha_p)
     """The Newton tangent of ``(ux, uy, p_w)`` (fields blocked) at the current iterate:
     :func:`soil.weakform.tangent` in the domain, the penalties on the boundary."""
     bc = disc.bc
-    coeff = weakform.tangent(tangent, stress, total, J, Finv, disc.w, model.case.fluid, dt)
+    coeff = weakform.tangent(tangent, stress, total, J, Finv, disc.w, model.case.fluid, dt,
+                             model.beta)
     pen = np.zeros((len(disc.bp.weights), 3, 3, 3, 3))
     constrained = bc.constrained | np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
     pen[:, :2, :, :2, :] = penalty_coefficients(disc.bp, constrained, alpha_u)

@@ -83,8 +83,7 @@ class Model:
     @property
     def beta(self):
         """Stabilisation ``h^2 / (4 M)`` of fem-p1p1-stab [m2/kPa], else 0."""
-        sc = self.scales
-        return sc.h**2 / (4 * sc.modulus) if self.space.pair.stabilised else 0.0
+        return self.scales.perturbation if self.space.pair.stabilised else 0.0
 
 
 @dataclass

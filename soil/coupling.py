@@ -81,6 +81,13 @@ class Scales:
                    float(material.constrained_modulus()), float(min(case.spacing)), pin)
 
     @property
+    def perturbation(self):
+        """``h^2 / (4 M)`` [m2/kPa]: the coefficient of the flow-equation perturbation
+        ``-beta int grad(p - p_n) . grad(q)`` of Aguilar, Gaspar, Lisbona and Rodrigo
+        (2008), with the initial P-wave modulus M and the smallest nodal spacing h."""
+        return self.h**2 / (4 * self.modulus)
+
+    @property
     def force(self):
         """Residual scale of equilibrium [force per unit thickness]."""
         return self.stress * self.h

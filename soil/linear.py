@@ -6,8 +6,8 @@ Two back-ends, one interface (:func:`factorise` returns an object with ``solve(b
   only). Nested-dissection ordering (METIS), threaded, weighted matching for the zero
   pressure blocks of undrained problems. ``make bench`` installs it.
 - ``"superlu"``: ``scipy.sparse.linalg.splu`` with COLAMD ordering, always available,
-  single-threaded. Its fill grows fast with the 20 to 30 neighbours of an MLS node: on a
-  10^4-node EFG tangent one factorisation takes about 30 s.
+  single-threaded. Its fill grows fast with the 20 to 30 neighbours of an MLS node, so it
+  is slow on large EFG tangents (``make bench`` measures both).
 
 ``pardiso`` is used when ``pypardiso`` imports, unless the environment variable
 ``SOILWATER_LINEAR_SOLVER=superlu`` asks otherwise. Both solvers reuse a factorisation
@@ -169,7 +169,7 @@ class _Pardiso:
     def _phase(self, phase, b):
         """PARDISO phase 12 (analysis, factorisation) or 33 (solve). ``PyPardisoSolver``'s
         own ``factorize`` and ``solve`` keep a copy of the matrix and compare it on every
-        solve (0.3 s and 0.1 s at 3 x 10^5 unknowns); this object owns its matrix."""
+        solve, at a cost that grows with the matrix; this object owns its matrix."""
         self.solver.set_phase(phase)
         return self.solver._call_pardiso(self.A, b)
 
@@ -177,7 +177,7 @@ class _Pardiso:
 def _solver(**options):
     """A new ``PyPardisoSolver``; the MKL library it found is remembered in
     ``PYPARDISO_MKL_RT``, so later ones skip pypardiso's search of the environment (a
-    directory walk of 0.2 s per solver)."""
+    directory walk)."""
     import pypardiso
 
     solver = pypardiso.PyPardisoSolver(**options)

@@ -87,6 +87,9 @@ Schema (every case has the same one; unknown keys are an error)::
                                       # degree, at most 19)
     penalty = 1e6                     # penalty factor relative to the stiffness scale
     correction = "vci"                # consistent test gradients (efg.vci) or "none"
+    stabilisation = "none"            # or "perturbation": the flow-equation term
+                                      # -h^2/(4M) int grad(p - p_n) . grad(q) of
+                                      # fem-p1p1-stab on the MLS pressure
 
 Boundary kinds of a displacement component:
 
@@ -162,7 +165,7 @@ KEYS = {
     "loading": ("velocity_gradient", "load"),
     "time": ("end", "steps", "dt0", "growth", "dt_max"),
     "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "cells", "order", "penalty",
-            "correction"),
+            "correction", "stabilisation"),
 }
 """The keys each section accepts (``edge``: each ``[boundary.<side>]``). ``[material]``,
 ``[probes]`` and ``[exact]`` take the keys of the material, the probe names and the

@@ -31,6 +31,9 @@ CELLS = ("delaunay", "squares")
 """Background integration cells of ``efg.cells``."""
 CORRECTIONS = ("vci", "none")
 """Test-gradient corrections of ``efg.correction``."""
+STABILISATIONS = ("none", "perturbation")
+"""Pressure stabilisations of ``efg.stabilisation``: none, or the flow-equation
+perturbation (:attr:`soil.coupling.Scales.perturbation`)."""
 
 
 def weight_form(name, key=None):
@@ -146,7 +149,9 @@ class EFGSettings:
     factor relative to the stiffness scale (P-wave modulus over nodal spacing);
     ``correction`` is ``vci`` (variationally consistent test-function gradients, which
     pass the patch test with any quadrature; :mod:`efg.vci`) or ``none`` (plain Gauss
-    quadrature of the MLS gradients, as in the paper).
+    quadrature of the MLS gradients, as in the paper); ``stabilisation`` is ``none`` or
+    ``perturbation``, the flow-equation term of Aguilar et al. (2008) that
+    ``fem-p1p1-stab`` adds, on the MLS pressure (:mod:`soil.weakform`).
 
     Examples
     --------
@@ -163,6 +168,7 @@ class EFGSettings:
     order: int = 2
     penalty: float = 1e6
     correction: str = "vci"
+    stabilisation: str = "none"
 
     def __post_init__(self):
         for field in ("weight_u", "weight_p"):

@@ -19,7 +19,8 @@ from soil.errors import InputError, require
 from soil.materials import FLUID_KEYS, material_from_spec
 from soil.schema import (ASPECTS, GEOMETRIC, KEYS, LENGTHS, MAX_TRIANGLE_ORDER, SCALES,
                          SECTIONS, expand_displacement)
-from soil.settings import CELLS, CORRECTIONS, DEFAULT_SCALE, EFGSettings, Weight
+from soil.settings import (CELLS, CORRECTIONS, DEFAULT_SCALE, STABILISATIONS, EFGSettings,
+                           Weight)
 
 _RESTRAINED = ("fixed", "prescribed", "exact")
 _CORNERS = (("left", "bottom"), ("left", "top"), ("right", "bottom"), ("right", "top"))
@@ -308,7 +309,9 @@ def _efg(table):
               "order": order,
               "penalty": _number(table, "penalty", "efg", defaults.penalty),
               "correction": _string(table, "correction", "efg", defaults.correction,
-                                    CORRECTIONS)}
+                                    CORRECTIONS),
+              "stabilisation": _string(table, "stabilisation", "efg",
+                                       defaults.stabilisation, STABILISATIONS)}
     require(values["cells"] != "delaunay" or order <= MAX_TRIANGLE_ORDER,
             f"efg.order = {order} must be at most {MAX_TRIANGLE_ORDER} with efg.cells = "
             "\"delaunay\" (the highest triangle rule): lower it or use efg.cells = "

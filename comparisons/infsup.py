@@ -1,0 +1,217 @@
+"""``soilwater infsup``: the numerical inf-sup test of every pair, on the solvers' own spaces.
+
+The test (:mod:`soil.infsup`) runs on a unit square of ``n x n`` grid nodes, the
+unconfined-compression case with ``geometry.width = height = 1``, ``layout = "grid"``
+and the user's ``--set`` overrides (e.g. ``efg.weight_u=exp:0.5``). Each method builds
+the three matrices from the shape functions and quadrature its solver uses:
+
+* FEM pairs: scikit-fem bases of :mod:`fem_reference.spaces` with the pair's Gauss rule;
+* EFG: MLS shape functions of u and p_w (``[efg]`` weights and scale factors) at the
+  background cells' integration points (``efg.cells``, ``efg.order``). The divergence is
+  that of the continuity equation, MLS trial gradients (the VCI correction acts on the
+  momentum equation's test gradients only).
+
+Boundary variants: ``free`` (the whole displacement space) and ``dirichlet`` (``v = 0``
+on the boundary, the Chapelle-Bathe standard). For FEM the boundary DOFs are removed. MLS
+shape functions do not interpolate, so for EFG the subspace is the null space of the
+displacement values at :data:`SAMPLES` Gauss points per boundary segment (singular values
+below :data:`RCOND` of the largest count as zero): ``v`` vanishes there, not by penalty.
+Under ``dirichlet`` the constant pressure is a zero mode of every pair and is not counted.
+
+Stabilised pairs (``fem-p1p1-stab``, EFG with ``efg.stabilisation = "perturbation"``)
+add their pressure term to the Schur complement: ``B S^-1 B^T + (h^2/4) L``, L the
+pressure Laplacian, which is the solvers' flow-equation perturbation ``beta = h^2 / (4 M)``
+(:attr:`soil.coupling.Scales.perturbation`) in units of the P-wave modulus M.
+"""
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import scipy.linalg as sla
+import scipy.sparse as sp
+from tqdm import tqdm
+
+from efg.assembly import Pattern, scatter
+from efg.boundary import boundary_points, segment_edges
+from efg.mls import ShapeFunctions
+from efg.quadrature import background
+from fem_reference.assembly import Shapes, block
+from fem_reference.spaces import PAIRS, Space, cell_bases
+from soil.coupling import Scales
+from soil.errors import require
+from soil.infsup import coefficients, inf_sup
+from soil.problems import load_case
+from soil.schema import apply_override
+from soil.validation import case_from_dict
+
+BOUNDARIES = ("free", "dirichlet")
+SIZES = (5, 9, 17, 33)
+#: Gauss points per boundary segment at which an EFG displacement of the ``dirichlet``
+#: subspace vanishes (more than the nodes whose supports reach a segment).
+SAMPLES = 8
+#: Relative singular value below which a boundary-value combination counts as zero.
+RCOND = 1e-10
+#: A pair passes when beta levels off: the slope of log beta against log h over the
+#: last three refinements at most this (P1/P1 decays with slope 1; a slope of 0.2 is a
+#: factor 1.5 over an eightfold refinement).
+LEVEL_SLOPE = 0.2
+#: Columns of the CSV.
+COLUMNS = ("method", "weights", "scale_u", "scale_p", "boundary", "n", "h", "beta",
+           "zero_modes")
+
+
+def square(n, overrides=()):
+    """The unit square of ``n x n`` grid nodes that the test runs on (a Case): the
+    unconfined compression without its probes, then ``overrides``."""
+    data = load_case("unconfined-compression").to_dict()
+    data.pop("probes")
+    for text in ("geometry.width=1.0", "geometry.height=1.0", f"discretisation.nx={n}",
+                 f"discretisation.ny={n}", "discretisation.layout=grid", *overrides):
+        apply_override(data, text)
+    return case_from_dict(data)
+
+
+def write(out, methods, sizes=SIZES, boundaries=BOUNDARIES, overrides=()):
+    """``soilwater infsup``: measure, then write the CSV ``out`` and the figure beside it
+    (``out`` with suffix ``.png``); nothing is written when a measurement fails.
+
+    Returns
+    -------
+    list of Path
+        The CSV and the figure.
+    """
+    from comparisons import figures
+    from soil.results import write_csv
+
+    out = Path(out)
+    require(out.suffix == ".csv", f"--out {out}: name a CSV file, e.g. infsup.csv")
+    table = measure(methods, sizes, boundaries, overrides, progress=True)
+    figure = out.with_suffix(".png")
+    figure.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=figure.parent, prefix=f".{figure.name}.", suffix=".png")
+    os.close(fd)
+    try:
+        figures.infsup(table, slopes(table), tmp)
+        write_csv(table, out)
+        os.replace(tmp, figure)
+    finally:
+        Path(tmp).unlink(missing_ok=True)
+    return [out, figure]
+
+
+def measure(methods, sizes=SIZES, boundaries=BOUNDARIES, overrides=(), progress=False):
+    """The inf-sup table: one row per method, boundary variant and size.
+
+    Parameters
+    ----------
+    methods : iterable of str
+        ``efg`` or FEM pairs of :data:`fem_reference.spaces.PAIRS`.
+    sizes : iterable of int
+        Nodes per side (>= 3).
+    boundaries : iterable of str
+        :data:`BOUNDARIES`.
+    overrides : iterable of str
+        ``section.key=value`` entries applied to every square (EFG settings).
+    progress : bool
+        Show a progress bar.
+
+    Returns
+    -------
+    pandas.DataFrame
+        :data:`COLUMNS`; ``beta`` dimensionless, ``h`` the nodal spacing [m]; the scale
+        factors are empty for FEM pairs.
+    """
+    known = ("efg", *PAIRS)
+    for method in methods:
+        require(method in known, f"--methods: {method!r} is unknown: use "
+                f"{', '.join(known)}")
+    for n in sizes:
+        require(n >= 3, f"--sizes: {n} nodes per side is too few: use 3 or more")
+    for boundary in boundaries:
+        require(boundary in BOUNDARIES, f"boundary {boundary!r}: use free or dirichlet")
+    rows = []
+    runs = [(m, n) for m in methods for n in sizes]
+    for method, n in tqdm(runs, desc="infsup", unit="size", disable=not progress or None,
+                          leave=False):
+        case = square(n, overrides)
+        forms = _efg(case) if method == "efg" else _fem(case, method)
+        for boundary in boundaries:
+            beta, zero = inf_sup(forms["S"], forms["B"], forms["T"], forms[boundary],
+                                 hydrostatic=boundary == "dirichlet", C=forms["C"])
+            rows.append({"method": method, "weights": forms["weights"],
+                         "scale_u": forms["scale_u"], "scale_p": forms["scale_p"],
+                         "boundary": boundary, "n": n, "h": 1.0 / (n - 1), "beta": beta,
+                         "zero_modes": zero})
+    return pd.DataFrame(rows, columns=list(COLUMNS))
+
+
+def slopes(table):
+    """Slope of log beta against log h over each (method, weights, scales, boundary)
+    group's last four sizes (infinite if beta is zero at one of them), and whether it
+    levels off (:data:`LEVEL_SLOPE`; fewer than four sizes never do)."""
+    keys = ["method", "weights", "scale_u", "scale_p", "boundary"]
+    rows = []
+    for key, group in table.groupby(keys, sort=False):
+        last = group.sort_values("h", ascending=False).tail(4)
+        slope = (np.polyfit(np.log(last.h), np.log(last.beta), 1)[0]
+                 if (last.beta > 0).all() else np.inf)
+        rows.append({**dict(zip(keys, key)), "slope": slope,
+                     "stable": bool(slope <= LEVEL_SLOPE and len(last) == 4)})
+    return pd.DataFrame(rows)
+
+
+def _fem(case, method):
+    """S, B, T, C and the boundary variants of an FEM pair on the case's mesh."""
+    space = Space.build(case, method)
+    ub, pb = cell_bases(space.mesh0, space.pair)
+    u, p = Shapes.of(ub), Shapes.of(pb)
+    E, Q = ub.dx.shape
+    gram, div, mass, stab = (c.reshape(E, Q, *c.shape[1:]) for c in coefficients(
+        ub.dx.ravel(), case.geometry.height, _perturbation(case, space.pair.stabilised)))
+    edge = np.unique(np.concatenate(list(space.u_dofs.values())))
+    interior = np.setdiff1d(np.arange(2 * space.n_u), np.concatenate([edge, space.n_u + edge]))
+    pair = space.pair
+    return {"S": block(u, u, gram), "B": block(p, u, div), "T": block(p, p, mass),
+            "C": block(p, p, stab), "free": None,
+            "dirichlet": sp.eye(2 * space.n_u, format="csr")[:, interior],
+            "weights": f"{pair.u_element.__name__}/{pair.p_element.__name__}",
+            "scale_u": "", "scale_p": ""}
+
+
+def _efg(case):
+    """S, B, T, C and the boundary variants of EFG on the case's nodes and cells."""
+    s, nodes, loop = case.efg, case.nodes(), case.boundary_loop()
+    quad = background(case, nodes, loop, s)
+    su = ShapeFunctions.build(nodes, quad.points, s.weight_u, s.scale_u, key="efg.scale_u")
+    sp_ = ShapeFunctions.build(nodes, quad.points, s.weight_p, s.scale_p, key="efg.scale_p")
+    gram, div, mass, stab = coefficients(
+        quad.weights, case.geometry.height,
+        _perturbation(case, s.stabilisation == "perturbation"))
+    samples = boundary_points(nodes, loop, segment_edges(nodes, loop, case.geometry),
+                              order=SAMPLES)
+    at_boundary = ShapeFunctions.build(nodes, samples.points, s.weight_u, s.scale_u,
+                                       key="efg.scale_u").phi.toarray()
+    zero = sla.null_space(at_boundary, rcond=RCOND)
+    return {"S": _efg_block(su, su, gram), "B": _efg_block(sp_, su, div),
+            "T": _efg_block(sp_, sp_, mass), "C": _efg_block(sp_, sp_, stab),
+            "free": None, "dirichlet": sla.block_diag(zero, zero),
+            "weights": f"{s.weight_u}/{s.weight_p}" + ("+stab" if stab.any() else ""),
+            "scale_u": s.scale_u, "scale_p": s.scale_p}
+
+
+def _efg_block(test, trial, coeff):
+    pattern = Pattern.build((test, trial))
+    return pattern.matrix(scatter(pattern, test, trial, coeff), coeff.shape[1],
+                          coeff.shape[3])
+
+
+def _perturbation(case, stabilised):
+    """The solvers' flow-equation perturbation times the P-wave modulus [m2] (the units
+    of ``S``), or 0 for an unstabilised pair."""
+    if not stabilised:
+        return 0.0
+    scales = Scales.of(case, case.material())
+    return scales.perturbation * scales.modulus
