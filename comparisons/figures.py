@@ -442,8 +442,8 @@ def bifurcation_ensemble(members, summary, path):
 
 def infsup(table, slopes, path):
     """Inf-sup value beta against the nodal spacing h (log-log), one line per pair and
-    setting, a panel per boundary variant; the legend gives each line's slope (sizes
-    where beta is zero are left out)."""
+    setting, a panel per boundary variant; the legend gives each line's last local slope
+    (:func:`comparisons.infsup.slopes`; sizes where beta is zero are left out)."""
     boundaries = list(dict.fromkeys(table.boundary))
     fig, axes = plt.subplots(1, len(boundaries), figsize=(6 * len(boundaries), 4.8),
                              sharey=True, constrained_layout=True, squeeze=False)

@@ -10,8 +10,9 @@ import itertools
 import numpy as np
 import pandas as pd
 
-from comparisons.metrics import (axis_profile, mandel_errors, moose_errors,
-                                 oscillation_index, overshoot, terzaghi_errors)
+from comparisons.metrics import (axis_profile, column_pollution, mandel_errors,
+                                 moose_errors, oscillation_index, overshoot, rating,
+                                 terzaghi_errors)
 from comparisons import runner
 from comparisons.peers import moose_terzaghi
 from efg.statics import solve
@@ -198,6 +199,43 @@ def fem_soil_column(ratios=(3, 30, 300), methods=FEM_METHODS):
                      "overshoot": overshoot(p, load),
                      "oscillation": oscillation_index(p, load),
                      "symbol": symbol(oscillation_index(p, load))})
+    return pd.DataFrame(rows)
+
+
+#: Methods of the column stability table: FEM pairs and EFG settings (overrides).
+STABILITY_METHODS = {"fem-th": ("fem-th", ()), "fem-p1p1": ("fem-p1p1", ()),
+                     "fem-p1p1-stab": ("fem-p1p1-stab", ()), "efg Q/Q": ("efg", ()),
+                     "efg E-A/E-B": ("efg", ("efg.weight_u=exp:0.5", "efg.weight_p=exp:0.25")),
+                     "efg Q/Q, perturbation": ("efg", ("efg.stabilisation=perturbation",))}
+
+
+def column_stability(permeabilities=(0.0, 1e-5), grids=((3, 21), (5, 41), (9, 81)),
+                     methods=STABILITY_METHODS):
+    """First-step pore-pressure stability of the soil column, boundary layer and interior
+    apart (:func:`comparisons.metrics.column_pollution`), under refinement at the built-in
+    column's ratio: the first step scales with h^2 (40 s at 3 x 21 nodes), so
+    ``h^2 / (c_v dt)`` stays 30 at k = 1e-5.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``permeability, nodes, h, dt, method, overshoot, interior, rating``.
+    """
+    base = load_case("soil-column")
+    h0, dt0 = base.spacing[1], float(base.times()[1])
+    settings = list(itertools.product(permeabilities, grids, methods.items()))
+    specs = []
+    for k, (nx, ny), (_, (method, extra)) in settings:
+        dt = dt0 * (base.geometry.height / (ny - 1) / h0) ** 2
+        specs.append(("soil-column", (f"material.permeability={k}", f"discretisation.nx={nx}",
+                                      f"discretisation.ny={ny}", "time.steps=1",
+                                      f"time.end={dt!r}", *extra), method))
+    rows = []
+    for (k, (nx, ny), (label, _)), result in zip(settings, _results(specs)):
+        over, interior = column_pollution(result, 1)
+        rows.append({"permeability": k, "nodes": f"{nx}x{ny}", "h": result.case.spacing[1],
+                     "dt": float(result.case.times()[1]), "method": label,
+                     "overshoot": over, "interior": interior, "rating": rating(interior)})
     return pd.DataFrame(rows)
 
 

@@ -1,0 +1,27 @@
+"""The column stability metric rates the known-good pair good and the known-bad one bad,
+then EFG: equal order pollutes the undrained interior, the flow-equation perturbation
+removes most of it."""
+
+import pytest
+
+from comparisons.metrics import BAD, GOOD
+from comparisons.verification import column_stability
+
+
+@pytest.fixture(scope="module")
+def undrained():
+    table = column_stability(permeabilities=(0.0,), grids=((3, 21), (5, 41)))
+    return table.set_index(["method", "nodes"])
+
+
+def test_taylor_hood_rates_good_and_p1p1_bad(undrained):
+    assert (undrained.loc["fem-th", "rating"] == "good").all()
+    assert (undrained.loc["fem-p1p1", "interior"] > BAD).all()
+
+
+def test_equal_order_efg_pollutes_and_the_perturbation_removes_most_of_it(undrained):
+    plain = undrained.loc["efg Q/Q", "interior"]
+    stabilised = undrained.loc["efg Q/Q, perturbation", "interior"]
+    assert (plain > BAD).all() and (stabilised < GOOD).all()
+    assert (stabilised < plain / 10).all()
+    assert stabilised["5x41"] < stabilised["3x21"]           # it falls under refinement
