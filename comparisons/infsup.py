@@ -83,7 +83,7 @@ def write(out, methods, sizes=SIZES, boundaries=BOUNDARIES, overrides=()):
     list of Path
         The CSV and the figure.
     """
-    from comparisons import figures
+    from comparisons import stability_figures
     from soil.results import write_csv
 
     out = Path(out)
@@ -94,7 +94,7 @@ def write(out, methods, sizes=SIZES, boundaries=BOUNDARIES, overrides=()):
     fd, tmp = tempfile.mkstemp(dir=figure.parent, prefix=f".{figure.name}.", suffix=".png")
     os.close(fd)
     try:
-        figures.infsup(table, slopes(table), tmp)
+        stability_figures.infsup(table, slopes(table), tmp)
         write_csv(table, out)
         os.replace(tmp, figure)
     finally:

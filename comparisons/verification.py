@@ -11,10 +11,11 @@ import numpy as np
 import pandas as pd
 
 from comparisons.metrics import (axis_profile, column_pollution, mandel_errors,
-                                 moose_errors, oscillation_index, overshoot, rating,
-                                 terzaghi_errors)
+                                 moose_errors, rating, terzaghi_errors)
 from comparisons import runner
 from comparisons.peers import moose_terzaghi
+from efg.mls import ShapeFunctions
+from efg.quadrature import background
 from efg.statics import solve
 from soil.analytical import undrained_pressure
 from soil.bifurcation import onset
@@ -136,70 +137,60 @@ def path_summary(table):
     return pd.DataFrame(rows)
 
 
-#: Weight combinations of the paper's Table 2 for (u, p_w).
+#: Weight combinations of the paper's Table 2 for (u, p_w), and E-B/E-B.
 COMBINATIONS = {"Q/Q": ("quartic", "quartic"), "E-A/E-A": ("exp:0.5", "exp:0.5"),
-                "E-A/E-B": ("exp:0.5", "exp:0.25")}
+                "E-A/E-B": ("exp:0.5", "exp:0.25"), "E-B/E-B": ("exp:0.25", "exp:0.25")}
+#: The paper's Table 2 symbols, from its lowest to its highest density of nodes in a
+#: support (× bad, △ better, ○ good); E-B/E-B is not in the paper.
+PAPER_TABLE2 = {"Q/Q": "× → ×", "E-A/E-A": "△ → △", "E-A/E-B": "△ → ○", "E-B/E-B": ""}
+#: Support scale factors of the Table 2 sweep (u and p_w alike).
+TABLE2_SCALES = (1.3, 1.6, 2.0, 2.5, 3.0)
 
 
-def soil_column(permeabilities=(1e-5, 1e-7), densities=(11, 21, 41),
-                combinations=COMBINATIONS, later=10):
-    """Pore-pressure stability of the EFG soil column (paper Table 2 analogue).
+def table2(scales=TABLE2_SCALES, combinations=COMBINATIONS, permeabilities=(0.0, 1e-5),
+           grid=(5, 41), dt=10.0):
+    """The paper's Table 2 as a sweep that varies one factor: the nodes in a support.
 
-    For each permeability, nodal density (nodes along the column, 3 across) and weight
-    combination: the overshoot (``max p_w / load - 1``) and the oscillation index
-    (:func:`comparisons.metrics.oscillation_index` of p_w along the axis over the load) at
-    the first step and at the step nearest to ``later x dt0``; ``ratio`` is
-    ``h^2 / (c_v dt0)`` with c_v from the initial stiffness.
-    """
-    settings = list(itertools.product(permeabilities, densities, combinations.items()))
-    results = _results([("soil-column", (f"material.permeability={k}",
-                                         f"discretisation.ny={ny}", f"efg.weight_u={wu}",
-                                         f"efg.weight_p={wp}", "time.end=4000.0"))
-                        for k, ny, (_, (wu, wp)) in settings])
-    rows = []
-    for (k, ny, (label, _)), result in zip(settings, results):
-        case = result.case
-        load = -case.boundary.top.traction[1]
-        times = np.array([s.time for s in result.snapshots])
-        step = int(np.argmin(np.abs(times - later * case.time.dt0)))
-        first, late = axis_profile(result, 1)[1], axis_profile(result, step)[1]
-        rows.append({"permeability": k, "ny": ny, "h": case.spacing[1],
-                     "ratio": stability_number(case), "weights": label,
-                     "overshoot_first": overshoot(first, load),
-                     "oscillation_first": oscillation_index(first, load),
-                     "symbol": symbol(oscillation_index(first, load)),
-                     "time_later": times[step],
-                     "oscillation_later": oscillation_index(late, load)})
-    return pd.DataFrame(rows)
-
-
-#: The scikit-fem reference methods.
-FEM_METHODS = ("fem-th", "fem-p1p1", "fem-p1p1-stab", "fem-q1q1", "fem-q2q1")
-
-
-def fem_soil_column(ratios=(3, 30, 300), methods=FEM_METHODS):
-    """First-step stability of the FEM soil column at first steps with these
-    ``h^2 / (c_v dt)`` (the built-in column, 3 x 21 vertices).
+    Every weight combination at every scale factor (u and p_w alike) on one grid with
+    one first step ``dt`` [s] (``h^2 / (c_v dt)`` = 30 at k = 1e-5 on 5 x 41 nodes), so
+    the grid aspect and the ratio stay fixed while the supports grow. Interior pollution
+    and its rating as in :func:`comparisons.metrics.column_pollution`.
 
     Returns
     -------
     pandas.DataFrame
-        ``ratio, dt, method, overshoot, oscillation`` (axis profile, over the load).
+        ``permeability, weights, scale, nodes_per_support`` (:func:`nodes_per_support`),
+        ``overshoot, interior, rating`` and ``paper`` (:data:`PAPER_TABLE2`).
     """
-    base = load_case("soil-column")
-    dts = [float(base.times()[1] * stability_number(base) / ratio) for ratio in ratios]
-    settings = list(itertools.product(zip(ratios, dts), methods))
-    results = _results([("soil-column", (f"time.end={dt!r}", "time.steps=1"), method)
-                        for (_, dt), method in settings])
+    nx, ny = grid
+    settings = list(itertools.product(permeabilities, combinations.items(), scales))
+    results = _results([("soil-column", (
+        f"material.permeability={k}", f"discretisation.nx={nx}", f"discretisation.ny={ny}",
+        "time.steps=1", f"time.end={dt!r}", f"efg.weight_u={wu}", f"efg.weight_p={wp}",
+        f"efg.scale_u={scale}", f"efg.scale_p={scale}"))
+        for k, (_, (wu, wp)), scale in settings])
     rows = []
-    for ((ratio, dt), method), result in zip(settings, results):
-        p = axis_profile(result, 1)[1]
-        load = -result.case.boundary.top.traction[1]
-        rows.append({"ratio": ratio, "dt": dt, "method": method,
-                     "overshoot": overshoot(p, load),
-                     "oscillation": oscillation_index(p, load),
-                     "symbol": symbol(oscillation_index(p, load))})
+    for (k, (label, _), scale), result in zip(settings, results):
+        over, interior = column_pollution(result, 1)
+        rows.append({"permeability": k, "weights": label, "scale": scale,
+                     "nodes_per_support": nodes_per_support(result.case),
+                     "overshoot": over, "interior": interior, "rating": rating(interior),
+                     "paper": PAPER_TABLE2.get(label, "")})
     return pd.DataFrame(rows)
+
+
+def nodes_per_support(case):
+    """Mean number of nodes whose p_w support covers an integration point of the case's
+    background cells (initial configuration): the paper's "density of nodal points
+    within a support"."""
+    s, nodes = case.efg, case.nodes()
+    quad = background(case, nodes, case.boundary_loop(), s)
+    phi = ShapeFunctions.build(nodes, quad.points, s.weight_p, s.scale_p).phi
+    return float(np.diff(phi.indptr).mean())
+
+
+#: The scikit-fem reference methods.
+FEM_METHODS = ("fem-th", "fem-p1p1", "fem-p1p1-stab", "fem-q1q1", "fem-q2q1")
 
 
 #: Methods of the column stability table: FEM pairs and EFG settings (overrides).
@@ -236,6 +227,29 @@ def column_stability(permeabilities=(0.0, 1e-5), grids=((3, 21), (5, 41), (9, 81
         rows.append({"permeability": k, "nodes": f"{nx}x{ny}", "h": result.case.spacing[1],
                      "dt": float(result.case.times()[1]), "method": label,
                      "overshoot": over, "interior": interior, "rating": rating(interior)})
+    return pd.DataFrame(rows)
+
+
+def column_ratios(ratios=(3, 30, 300), methods=STABILITY_METHODS):
+    """First-step pore-pressure stability of the built-in column (3 x 21 nodes,
+    k = 1e-5) at first steps with these ``h^2 / (c_v dt)``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``ratio, dt, method, overshoot, interior, rating``
+        (:func:`comparisons.metrics.column_pollution`).
+    """
+    base = load_case("soil-column")
+    dts = [float(base.times()[1] * stability_number(base) / ratio) for ratio in ratios]
+    settings = list(itertools.product(zip(ratios, dts), methods.items()))
+    results = _results([("soil-column", (f"time.end={dt!r}", "time.steps=1", *extra),
+                         method) for (_, dt), (_, (method, extra)) in settings])
+    rows = []
+    for ((ratio, dt), (label, _)), result in zip(settings, results):
+        over, interior = column_pollution(result, 1)
+        rows.append({"ratio": ratio, "dt": dt, "method": label, "overshoot": over,
+                     "interior": interior, "rating": rating(interior)})
     return pd.DataFrame(rows)
 
 
@@ -337,16 +351,6 @@ def column_profiles(runs=COLUMN_RUNS):
         frames.append(pd.DataFrame({"run": label, "y": y, "p_w": p / load,
                                     "reference": reference / load}))
     return pd.concat(frames, ignore_index=True)
-
-
-#: Oscillation-index thresholds of the paper's symbols (first step, over the load).
-SYMBOLS = ((0.1, "good (○)"), (1.0, "better (△)"), (np.inf, "bad (×)"))
-
-
-def symbol(index):
-    """The paper's Table 2 symbol for an oscillation index: < 0.1 good, < 1 better, else
-    bad."""
-    return next(label for limit, label in SYMBOLS if index < limit)
 
 
 def consolidation_histories():

@@ -18,12 +18,12 @@ def test_a_reference_altered_by_1e_3_fails_with_a_readable_diff(tmp_path):
     folder = tmp_path / "reference"
     shutil.copytree(REFERENCE, folder)
     table = pd.read_csv(folder / "column_stability.csv")
-    original = table.loc[1, "overshoot_first"]
-    table.loc[1, "overshoot_first"] = original * (1 + 1e-3)
+    original = table.loc[1, "overshoot"]
+    table.loc[1, "overshoot"] = original * (1 + 1e-3)
     table.to_csv(folder / "column_stability.csv", index=False)
     lines = check(folder, names=["column_stability"])["column_stability"]
     assert len(lines) == 1
-    assert lines[0].startswith("row 1, overshoot_first: reference")
+    assert lines[0].startswith("row 1, overshoot: reference")
     assert f"{original:.6g}"[:6] in lines[0] and "allowed 0.0001 relative" in lines[0]
 
 
