@@ -25,3 +25,17 @@ def test_equal_order_efg_pollutes_and_the_perturbation_removes_most_of_it(undrai
     assert (plain > BAD).all() and (stabilised < GOOD).all()
     assert (stabilised < plain / 10).all()
     assert stabilised["5x41"] < stabilised["3x21"]           # it falls under refinement
+
+
+def test_the_perturbation_keeps_terzaghi_and_mandel_within_their_bounds():
+    """The same bounds as the unstabilised solver's tests (tests/test_efg_solver.py)."""
+    from comparisons.metrics import mandel_errors, terzaghi_errors
+    from comparisons.verification import _results
+
+    stab = "efg.stabilisation=perturbation"
+    terzaghi, mandel = _results([("terzaghi", ("discretisation.nx=5",
+                                               "discretisation.ny=41", stab)),
+                                 ("mandel", (stab,))])
+    t, m = terzaghi_errors(terzaghi), mandel_errors(mandel)
+    assert t["max_error_load_after_0.1"] < 0.02 and t["settlement_error_after_0.1"] < 0.01
+    assert m["max_error"] < 0.05 and m["peak_centre"] > 1.05
