@@ -7,9 +7,8 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from comparisons import (figures, infsup, metrics, peers, runner, stability_figures, tables,
-                         uniqueness, verification)
-from soil import infsup as soil_infsup
+from comparisons import (figures, infsup, peers, runner, stability_figures, stability_report,
+                         tables, uniqueness, verification)
 
 
 def make_report(root="reports"):
@@ -84,6 +83,8 @@ TASKS = [
     _table("table2", verification.table2, "table2"),
     _figure("table2 figure", stability_figures.table2, "table2", "table2"),
     _table("column ratios", verification.column_ratios, "column_ratios"),
+    _table("column skeletons", verification.column_skeletons, "column_skeletons"),
+    _table("quadrature orders", verification.quadrature_orders, "quadrature_orders"),
     _table("profiles", verification.column_profiles, "column_profiles"),
     _figure("profiles figure", figures.column_profiles, "column_profiles", "profiles"),
     _table("efg consolidation", verification.consolidation, "efg_consolidation"),
@@ -181,89 +182,6 @@ def _uniqueness_section(data):
     ]
 
 
-def _stability_section(data):
-    """The inf-sup test of every pair and the column's boundary layer and interior."""
-    fits, col = data["infsup slopes"], data["column stability"]
-    last = data["infsup"][data["infsup"].n == data["infsup"].n.max()]
-    summary = fits.merge(last[["method", "weights", "scale_u", "scale_p", "boundary",
-                               "beta", "zero_modes"]],
-                         on=["method", "weights", "scale_u", "scale_p", "boundary"])
-    passing = sorted({_pair(r) for r in fits[fits.stable].itertuples()})
-    undrained = col[col.permeability == 0].pivot(index="method", columns="nodes",
-                                                 values="interior")
-    return [
-        "### Inf-sup test and interior pollution",
-        "",
-        "![infsup](figures/infsup.png)",
-        "",
-        "The numerical inf-sup test of Chapelle and Bathe (`soilwater infsup`) on a unit "
-        "square of n x n grid nodes, on each method's own shape functions and "
-        "quadrature, with v free and with v = 0 on the boundary (zero-mean pressures). "
-        "A pair passes when beta levels off: on n = "
-        f"{', '.join(str(n) for n in sorted(set(data['infsup'].n)))}, the local slope "
-        f"of log beta against log h at most {infsup.LEVEL_SLOPE:g} over each of the last "
-        "two refinements. That slope (the larger), and beta and zero modes at the finest "
-        "size:",
-        "",
-        tables.to_markdown(summary, floatfmt="{:.3g}"),
-        "Where beta stays near "
-        f"{np.sqrt(soil_infsup.ZERO):.0e} (EFG with v = 0), it is the resolution of the "
-        f"zero-mode threshold (eigenvalues below {soil_infsup.ZERO:g} of the largest): "
-        "the spectrum has no gap, the pair no inf-sup constant. "
-        "Passing both variants: " + (", ".join(
-            p for p in passing if (fits[fits.apply(_pair, axis=1) == p].stable.all()))
-            or "none") + ".",
-        "",
-        "First-step pore pressure of the soil column, split into the boundary layer "
-        f"(within {metrics.LAYER:g} m of the drained top: overshoot over the load) and "
-        "the interior (deeper: the largest |p - p_ref| at any node over the load, p_ref "
-        "Terzaghi's series at the initial stiffness, or the undrained pressure at "
-        "k = 0), under refinement with the first step scaled with h^2 (h^2/(c_v dt) = 30 "
-        f"at k = 1e-5). Rating: good up to {metrics.GOOD:g} (just above Taylor-Hood's "
-        f"worst), bad beyond {metrics.BAD:g} (P1/P1 at k = 0), fair between:",
-        "",
-        tables.to_markdown(col, floatfmt="{:.3g}"),
-        "Interior pollution at k = 0 (undrained) by method and grid:",
-        "",
-        tables.to_markdown(undrained.reset_index(), floatfmt="{:.3g}"),
-        "With the flow-equation perturbation (`efg.stabilisation = \"perturbation\"`, "
-        "the beta = h²/(4M) of fem-p1p1-stab) the undrained interior pollution of EFG "
-        "Q/Q falls from "
-        + ", ".join(f"{undrained.loc['efg Q/Q', n]:.3g}" for n in undrained.columns)
-        + " to " + ", ".join(f"{undrained.loc['efg Q/Q, perturbation', n]:.3g}"
-                             for n in undrained.columns)
-        + f" on {', '.join(undrained.columns)} nodes; fem-p1p1-stab reaches "
-        + ", ".join(f"{undrained.loc['fem-p1p1-stab', n]:.3g}" for n in undrained.columns)
-        + ".",
-        "",
-    ]
-
-
-def _table2_findings(t2):
-    """What the Table 2 sweep shows, per permeability: the best EFG setting and the
-    ratings of the paper's 'good' combination."""
-    lines = []
-    for k, part in t2.groupby("permeability"):
-        best = part.loc[part.interior.idxmin()]
-        eaeb = part[part.weights == "E-A/E-B"]
-        lines.append(
-            f"At k = {k:g}: the least interior pollution is {best.interior:.3g} "
-            f"({best.weights} at scale {best.scale:g}, {best.nodes_per_support:.0f} nodes "
-            "per support); ratings " + ", ".join(
-                f"{r}: {n}" for r, n in part.rating.value_counts().sort_index().items())
-            + ". The paper's good E-A/E-B at high density rates "
-            + " to ".join(dict.fromkeys(eaeb.sort_values("scale").rating)) + f" here "
-            f"({eaeb.interior.min():.3g} to {eaeb.interior.max():.3g}).")
-    return " ".join(lines)
-
-
-def _pair(row):
-    """A pair's name in the inf-sup table: the FEM method, or EFG with its settings."""
-    if row.method != "efg":
-        return row.method
-    return f"efg {row.weights} scale {row.scale_u:g}/{row.scale_p:g}"
-
-
 def _verdicts(uc, bif, fits, col, t2, ec, ft):
     """The paper's claims, each with its verdict and the measurement behind it."""
     sq, de = (uc.loc[f"EFG, {c}, plain Gauss"] for c in ("squares", "Delaunay"))
@@ -296,7 +214,7 @@ def _verdicts(uc, bif, fits, col, t2, ec, ft):
         if not plain.stable.any() else
         "| Some MLS weight combinations and densities give stable equal-order pore "
         "pressures (Table 2): in the inf-sup sense | supported | passing: "
-        + ", ".join(_pair(r) for r in plain[plain.stable].itertuples()) + " |",
+        + ", ".join(stability_report.pair(r) for r in plain[plain.stable].itertuples()) + " |",
         "| ... and in practice, undrained (k = 0, first-step interior pollution, Table 2 "
         "sweep) | " + ("supported for " + ", ".join(
             f"{r.weights} x{r.scale:g}" for r in undrained[
@@ -425,13 +343,25 @@ def markdown(data):
         "![table2](figures/table2.png)",
         "",
         tables.to_markdown(t2, floatfmt="{:.3g}"),
-        _table2_findings(t2),
+        stability_report.table2_findings(t2),
         "",
         "The built-in column (3 x 21 nodes, k = 1e-5) at first steps with h²/(c_v dt) of "
         "3, 30 and 300:",
         "",
         tables.to_markdown(data["column ratios"], floatfmt="{:.3g}"),
-        *_stability_section(data),
+        "The same first step (5 x 41 nodes, 10 s) with the Cam-clay skeleton and with a "
+        "linear elastic one of the same initial moduli:",
+        "",
+        tables.to_markdown(data["column skeletons"].pivot_table(
+            index=["permeability", "method"], columns="skeleton",
+            values="interior").reset_index(), floatfmt="{:.3g}"),
+        "Do exponential weights need a higher triangle rule (issue 14, item 5)? Each "
+        "combination at Delaunay rules of degree 2, 4 and 6, VCI on:",
+        "",
+        tables.to_markdown(data["quadrature orders"], floatfmt="{:.3g}"),
+        stability_report.orders_finding(data["quadrature orders"]),
+        "",
+        *stability_report.section(data),
         "## Verification: Terzaghi and Mandel",
         "",
         "![consolidation](figures/consolidation.png)",

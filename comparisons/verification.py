@@ -171,12 +171,17 @@ def table2(scales=TABLE2_SCALES, combinations=COMBINATIONS, permeabilities=(0.0,
         for k, (_, (wu, wp)), scale in settings])
     rows = []
     for (k, (label, _), scale), result in zip(settings, results):
-        over, interior = column_pollution(result, 1)
         rows.append({"permeability": k, "weights": label, "scale": scale,
                      "nodes_per_support": nodes_per_support(result.case),
-                     "overshoot": over, "interior": interior, "rating": rating(interior),
-                     "paper": PAPER_TABLE2.get(label, "")})
+                     **_pollution(result), "paper": PAPER_TABLE2.get(label, "")})
     return pd.DataFrame(rows)
+
+
+def _pollution(result):
+    """``overshoot``, ``interior`` and ``rating`` of a column run's first step
+    (:func:`comparisons.metrics.column_pollution`)."""
+    overshoot, interior = column_pollution(result, 1)
+    return {"overshoot": overshoot, "interior": interior, "rating": rating(interior)}
 
 
 def nodes_per_support(case):
@@ -187,6 +192,41 @@ def nodes_per_support(case):
     quad = background(case, nodes, case.boundary_loop(), s)
     phi = ShapeFunctions.build(nodes, quad.points, s.weight_p, s.scale_p).phi
     return float(np.diff(phi.indptr).mean())
+
+
+def quadrature_orders(orders=(2, 4, 6), combinations=COMBINATIONS):
+    """Does a weight need a higher triangle rule? Each weight combination at each
+    Delaunay rule degree (``efg.order``, VCI on): the column's first-step interior
+    pollution (5 x 41 nodes, k = 0 and 1e-5), Terzaghi's error for t >= 0.1 (5 x 41),
+    the patch test's displacement error and the cantilever's energy error (u's weight).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``weights, order, interior_k0, interior_k1e-5, terzaghi, patch, cantilever``.
+    """
+    column = ("discretisation.nx=5", "discretisation.ny=41", "time.steps=1", "time.end=10.0")
+    settings = list(itertools.product(combinations.items(), orders))
+    specs = []
+    for (_, (wu, wp)), order in settings:
+        o = (f"efg.weight_u={wu}", f"efg.weight_p={wp}", f"efg.order={order}")
+        specs += [("soil-column", ("material.permeability=0.0", *column, *o)),
+                  ("soil-column", ("material.permeability=1e-05", *column, *o)),
+                  ("terzaghi", ("discretisation.nx=5", "discretisation.ny=41", *o))]
+    results = iter(_results(specs))
+    rows = []
+    for (label, (wu, _)), order in settings:
+        undrained, seeping, terzaghi = next(results), next(results), next(results)
+        static = [f"efg.weight_u={wu}", f"efg.order={order}"]
+        rows.append({"weights": label, "order": order,
+                     "interior_k0": column_pollution(undrained, 1)[1],
+                     "interior_k1e-5": column_pollution(seeping, 1)[1],
+                     "terzaghi": terzaghi_errors(terzaghi)["max_error_load_after_0.1"],
+                     "patch": solve(load_case("patch-test", static)).summary["errors"][
+                         "displacement"],
+                     "cantilever": solve(load_case("cantilever", static)).summary["errors"][
+                         "energy"]})
+    return pd.DataFrame(rows)
 
 
 #: The scikit-fem reference methods.
@@ -223,10 +263,9 @@ def column_stability(permeabilities=(0.0, 1e-5), grids=((3, 21), (5, 41), (9, 81
                                       f"time.end={dt!r}", *extra), method))
     rows = []
     for (k, (nx, ny), (label, _)), result in zip(settings, _results(specs)):
-        over, interior = column_pollution(result, 1)
         rows.append({"permeability": k, "nodes": f"{nx}x{ny}", "h": result.case.spacing[1],
                      "dt": float(result.case.times()[1]), "method": label,
-                     "overshoot": over, "interior": interior, "rating": rating(interior)})
+                     **_pollution(result)})
     return pd.DataFrame(rows)
 
 
@@ -247,9 +286,32 @@ def column_ratios(ratios=(3, 30, 300), methods=STABILITY_METHODS):
                          method) for (_, dt), (_, (method, extra)) in settings])
     rows = []
     for ((ratio, dt), (label, _)), result in zip(settings, results):
-        over, interior = column_pollution(result, 1)
-        rows.append({"ratio": ratio, "dt": dt, "method": label, "overshoot": over,
-                     "interior": interior, "rating": rating(interior)})
+        rows.append({"ratio": ratio, "dt": dt, "method": label, **_pollution(result)})
+    return pd.DataFrame(rows)
+
+
+def column_skeletons(methods=STABILITY_METHODS, permeabilities=(0.0, 1e-5), grid=(5, 41),
+                     dt=10.0):
+    """The column's first step with the Cam-clay skeleton and with a linear elastic one
+    of the same initial moduli (``material.model = "elastic"`` on the preset): how much
+    of the pollution the clay's yielding adds.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``permeability, skeleton, method, overshoot, interior, rating``.
+    """
+    nx, ny = grid
+    skeletons = {"Cam-clay": (), "elastic": ("material.model=elastic",)}
+    settings = list(itertools.product(permeabilities, skeletons.items(), methods.items()))
+    results = _results([("soil-column", (
+        f"material.permeability={k}", f"discretisation.nx={nx}", f"discretisation.ny={ny}",
+        "time.steps=1", f"time.end={dt!r}", *skeleton, *extra), method)
+        for k, (_, skeleton), (_, (method, extra)) in settings])
+    rows = []
+    for (k, (skeleton, _), (label, _)), result in zip(settings, results):
+        rows.append({"permeability": k, "skeleton": skeleton, "method": label,
+                     **_pollution(result)})
     return pd.DataFrame(rows)
 
 

@@ -31,7 +31,11 @@ def material_from_spec(spec):
     spec : mapping
         ``model`` (default ``original``), optional ``preset`` and parameter keys.
         Keys that describe the pore fluid (``permeability``, ``gamma_w``, ``biot_alpha``,
-        ``storage``) are ignored here; :mod:`soil.problems` reads them.
+        ``storage``) are ignored here; :mod:`soil.case` reads them. ``model =
+        "elastic"`` with a Cam-clay preset is the linear elastic skeleton with the
+        preset's initial moduli (``K = v0 p'0 / kappa`` and its ``nu``) and its p'0, for
+        comparing a skeleton that cannot yield with the clay; explicit ``E``, ``nu`` or
+        ``p0`` replace them.
 
     Returns
     -------
@@ -41,6 +45,8 @@ def material_from_spec(spec):
     --------
     >>> material_from_spec({"preset": "table1", "model": "modified"}).model
     'modified'
+    >>> round(material_from_spec({"preset": "table1", "model": "elastic"}).E, 3)
+    137.524
     """
     spec = {k: v for k, v in spec.items() if k not in FLUID_KEYS}
     model = spec.pop("model", "original")
@@ -50,6 +56,8 @@ def material_from_spec(spec):
         require(preset in PRESETS, f"material.preset = {preset!r} is unknown: "
                 f"use one of {', '.join(PRESETS)}")
         values.update(PRESETS[preset])
+        if model == "elastic" and "kappa" in values:
+            values = _initial_elasticity(values)
     values.update(spec)
     keys = _ELASTIC_KEYS if model == "elastic" else _CAMCLAY_KEYS
     unknown = sorted(set(values) - set(keys))
@@ -64,6 +72,13 @@ def material_from_spec(spec):
         missing = "E, nu" if model == "elastic" else "lambda, kappa, M, nu, e0, p0"
         raise InputError(f"material: missing parameters for model {model!r} "
                          f"(needs {missing}): {err}") from None
+
+
+def _initial_elasticity(clay):
+    """``E``, ``nu`` and ``p0`` of a Cam-clay parameter set's initial elastic moduli."""
+    K, G = CamClay(**{_CAMCLAY_KEYS[k]: v for k, v in clay.items()}).moduli()
+    return {"E": float(9 * K * G / (3 * K + G)),
+            "nu": float((3 * K - 2 * G) / (2 * (3 * K + G))), "p0": clay["p0"]}
 
 
 #: Fluid keys that may sit in a material table; they belong to the coupled problem.

@@ -159,3 +159,12 @@ def test_update_is_vectorised_over_points():
 def test_bad_parameters_name_themselves(spec, word):
     with pytest.raises(InputError, match=word):
         material_from_spec(spec)
+
+
+def test_elastic_skeleton_from_a_cam_clay_preset_has_its_initial_moduli():
+    clay = material_from_spec({"preset": "table1"})
+    elastic = material_from_spec({"preset": "table1", "model": "elastic"})
+    assert np.allclose(elastic.moduli(), clay.moduli(), rtol=1e-12)
+    assert elastic.p0 == clay.p0 and not elastic.plastic
+    with pytest.raises(InputError, match="lambda"):
+        material_from_spec({"preset": "table1", "model": "elastic", "lambda": 0.2})
