@@ -213,7 +213,7 @@ def _efg(case):
     sp_ = ShapeFunctions.build(nodes, quad.points, s.weight_p, s.scale_p, key="efg.scale_p")
     gram, div, mass, stab = coefficients(
         quad.weights, case.geometry.height,
-        _perturbation(case, s.stabilisation == "perturbation"))
+        _perturbation(case, s.stabilisation == "perturbation") * s.stabilisation_factor)
     samples = boundary_points(nodes, loop, segment_edges(nodes, loop, case.geometry),
                               order=SAMPLES)
     at_boundary = ShapeFunctions.build(nodes, samples.points, s.weight_u, s.scale_u,

@@ -85,6 +85,8 @@ TASKS = [
     _table("column ratios", verification.column_ratios, "column_ratios"),
     _table("column skeletons", verification.column_skeletons, "column_skeletons"),
     _table("quadrature orders", verification.quadrature_orders, "quadrature_orders"),
+    _table("perturbation factors", verification.perturbation_factors,
+           "perturbation_factors"),
     _table("profiles", verification.column_profiles, "column_profiles"),
     _figure("profiles figure", figures.column_profiles, "column_profiles", "profiles"),
     _table("efg consolidation", verification.consolidation, "efg_consolidation"),

@@ -61,9 +61,31 @@ def section(data):
                              for n in undrained.columns)
         + f" on {', '.join(undrained.columns)} nodes; fem-p1p1-stab reaches "
         + ", ".join(f"{undrained.loc['fem-p1p1-stab', n]:.3g}" for n in undrained.columns)
-        + ".",
+        + ". The same with the perturbation multiplied by `efg.stabilisation_factor` "
+        "(default 1), against Terzaghi's error (5 x 41, t >= 0.1) and the inf-sup test "
+        "(v = 0):",
+        "",
+        tables.to_markdown(data["perturbation factors"], floatfmt="{:.3g}"),
+        factors_finding(data["perturbation factors"]),
         "",
     ]
+
+
+def factors_finding(factors, target=0.02):
+    """Which factors bring the 5 x 41 column below ``target`` and what they cost."""
+    below = factors[factors["interior_5x41"] < target]
+    one = factors.set_index("factor").loc[1]
+    if below.empty:
+        return (f"No factor brings the 5 x 41 interior below {target:g} of the load; "
+                "the default stays 1.")
+    first = below.iloc[0]
+    return (f"The smallest factor bringing the 5 x 41 interior below {target:g} of the load "
+            f"is {first.factor:g} ({first['interior_5x41']:.3g}); it moves Terzaghi's "
+            f"error from {one.terzaghi:.4f} to {first.terzaghi:.4f} and the inf-sup slope "
+            f"from {one.slope:.2f} to {first.slope:.2f} ("
+            + ("levels off" if first.slope <= infsup.LEVEL_SLOPE else "no longer levels off")
+            + f" by the {infsup.LEVEL_SLOPE:g} rule). The default stays 1, fem-p1p1-stab's "
+            "beta: no factor was chosen to meet a target.")
 
 
 def table2_findings(t2):

@@ -194,6 +194,41 @@ def nodes_per_support(case):
     return float(np.diff(phi.indptr).mean())
 
 
+def perturbation_factors(factors=(1, 2, 4, 8), grids=((3, 21), (5, 41), (9, 81))):
+    """EFG Q/Q with the flow-equation perturbation times ``efg.stabilisation_factor``:
+    the undrained (k = 0) column's first-step interior pollution per grid (first step
+    scaled with h^2, as in :func:`column_stability`), Terzaghi's error for t >= 0.1
+    (5 x 41 nodes) and the inf-sup test with v = 0 (:func:`comparisons.infsup.measure`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``factor``, ``interior_NxM`` per grid, ``terzaghi``, ``beta`` (n = 33) and
+        ``slope`` (:func:`comparisons.infsup.slopes`).
+    """
+    from comparisons import infsup
+
+    base = load_case("soil-column")
+    h0, dt0 = base.spacing[1], float(base.times()[1])
+    rows = []
+    for factor in factors:
+        o = ("efg.stabilisation=perturbation", f"efg.stabilisation_factor={factor}")
+        specs = [("soil-column", ("material.permeability=0.0", f"discretisation.nx={nx}",
+                                  f"discretisation.ny={ny}", "time.steps=1",
+                                  f"time.end={dt0 * (base.geometry.height / (ny - 1) / h0) ** 2!r}",
+                                  *o)) for nx, ny in grids]
+        specs.append(("terzaghi", ("discretisation.nx=5", "discretisation.ny=41", *o)))
+        *columns, terzaghi = _results(specs)
+        test = infsup.measure(["efg"], boundaries=["dirichlet"], overrides=o)
+        fit = infsup.slopes(test).iloc[0]
+        rows.append({"factor": factor,
+                     **{f"interior_{nx}x{ny}": _pollution(r)["interior"]
+                        for (nx, ny), r in zip(grids, columns)},
+                     "terzaghi": terzaghi_errors(terzaghi)["max_error_load_after_0.1"],
+                     "beta": test.beta.iloc[-1], "slope": fit.slope})
+    return pd.DataFrame(rows)
+
+
 def quadrature_orders(orders=(2, 4, 6), combinations=COMBINATIONS):
     """Does a weight need a higher triangle rule? Each weight combination at each
     Delaunay rule degree (``efg.order``, VCI on): the column's first-step interior

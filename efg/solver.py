@@ -87,9 +87,12 @@ class Model:
     @property
     def beta(self):
         """Coefficient of the flow-equation perturbation [m2/kPa] with
-        ``efg.stabilisation = "perturbation"``, else 0."""
-        perturbed = self.case.efg.stabilisation == "perturbation"
-        return self.scales.perturbation if perturbed else 0.0
+        ``efg.stabilisation = "perturbation"`` (times ``efg.stabilisation_factor``), else
+        0."""
+        s = self.case.efg
+        if s.stabilisation != "perturbation":
+            return 0.0
+        return self.scales.perturbation * s.stabilisation_factor
 
 
 def solve(case, progress=True):

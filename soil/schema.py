@@ -90,6 +90,7 @@ Schema (every case has the same one; unknown keys are an error)::
     stabilisation = "none"            # or "perturbation": the flow-equation term
                                       # -h^2/(4M) int grad(p - p_n) . grad(q) of
                                       # fem-p1p1-stab on the MLS pressure
+    stabilisation_factor = 1.0        # multiplies that h^2/(4M), 0 < factor <= 1000
 
 Boundary kinds of a displacement component:
 
@@ -165,7 +166,7 @@ KEYS = {
     "loading": ("velocity_gradient", "load"),
     "time": ("end", "steps", "dt0", "growth", "dt_max"),
     "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "cells", "order", "penalty",
-            "correction", "stabilisation"),
+            "correction", "stabilisation", "stabilisation_factor"),
 }
 """The keys each section accepts (``edge``: each ``[boundary.<side>]``). ``[material]``,
 ``[probes]`` and ``[exact]`` take the keys of the material, the probe names and the

@@ -151,7 +151,8 @@ class EFGSettings:
     pass the patch test with any quadrature; :mod:`efg.vci`) or ``none`` (plain Gauss
     quadrature of the MLS gradients, as in the paper); ``stabilisation`` is ``none`` or
     ``perturbation``, the flow-equation term of Aguilar et al. (2008) that
-    ``fem-p1p1-stab`` adds, on the MLS pressure (:mod:`soil.weakform`).
+    ``fem-p1p1-stab`` adds, on the MLS pressure (:mod:`soil.weakform`), with its
+    coefficient ``h^2 / (4 M)`` multiplied by ``stabilisation_factor`` (dimensionless).
 
     Examples
     --------
@@ -169,6 +170,7 @@ class EFGSettings:
     penalty: float = 1e6
     correction: str = "vci"
     stabilisation: str = "none"
+    stabilisation_factor: float = 1.0
 
     def __post_init__(self):
         for field in ("weight_u", "weight_p"):

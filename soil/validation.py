@@ -311,7 +311,9 @@ def _efg(table):
               "correction": _string(table, "correction", "efg", defaults.correction,
                                     CORRECTIONS),
               "stabilisation": _string(table, "stabilisation", "efg",
-                                       defaults.stabilisation, STABILISATIONS)}
+                                       defaults.stabilisation, STABILISATIONS),
+              "stabilisation_factor": _number(table, "stabilisation_factor", "efg",
+                                              defaults.stabilisation_factor)}
     require(values["cells"] != "delaunay" or order <= MAX_TRIANGLE_ORDER,
             f"efg.order = {order} must be at most {MAX_TRIANGLE_ORDER} with efg.cells = "
             "\"delaunay\" (the highest triangle rule): lower it or use efg.cells = "
@@ -327,6 +329,9 @@ def _efg(table):
                 "the MLS moment matrices approach singularity): use 1.2 to 2, e.g. "
                 f"{DEFAULT_SCALE:g}")
     require(values["penalty"] > 0, f"efg.penalty = {values['penalty']:g} must be positive")
+    factor = values["stabilisation_factor"]
+    require(0 < factor <= 1e3, f"efg.stabilisation_factor = {factor:g} must be in (0, 1000] "
+            "(it multiplies the perturbation h^2/(4M); 1 is fem-p1p1-stab's)")
     return EFGSettings(**values)
 
 

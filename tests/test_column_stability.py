@@ -39,3 +39,15 @@ def test_the_perturbation_keeps_terzaghi_and_mandel_within_their_bounds():
     t, m = terzaghi_errors(terzaghi), mandel_errors(mandel)
     assert t["max_error_load_after_0.1"] < 0.02 and t["settlement_error_after_0.1"] < 0.01
     assert m["max_error"] < 0.05 and m["peak_centre"] > 1.05
+
+
+def test_the_factor_scales_the_perturbation_and_summary_records_it():
+    from efg.solver import Model
+    from soil.problems import load_case
+
+    stab = ["efg.stabilisation=perturbation"]
+    one = Model.build(load_case("soil-column", stab))
+    four = Model.build(load_case("soil-column", [*stab, "efg.stabilisation_factor=4"]))
+    assert one.beta == pytest.approx(one.scales.h**2 / (4 * one.scales.modulus))
+    assert four.beta == pytest.approx(4 * one.beta)
+    assert Model.build(load_case("soil-column")).beta == 0.0

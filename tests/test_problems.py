@@ -152,6 +152,8 @@ REFUSED = [
     ("terzaghi", ["efg.scale_p=1e5"], "efg.scale_p = 100000 must be <= 1000"),
     ("terzaghi", ["efg.scale_u=nan"], "efg.scale_u = nan"),
     ("terzaghi", ["efg.order=0"], "efg.order = 0"),
+    ("terzaghi", ["efg.stabilisation_factor=0"], "efg.stabilisation_factor = 0"),
+    ("terzaghi", ["efg.stabilisation=pressure"], "efg.stabilisation"),
     ("terzaghi", ["efg.order=true"], "efg.order = True"),
     ("terzaghi", [f"efg.order={MAX_TRIANGLE_ORDER + 1}"], "efg.order = 20"),
     ("terzaghi", ["efg.penalty=inf"], "efg.penalty = inf"),
