@@ -34,13 +34,14 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 from tqdm import tqdm
 
+import efg.solver
+import fem_reference.solver
 from efg.assembly import Pattern, scatter
 from efg.boundary import boundary_points, segment_edges
 from efg.mls import ShapeFunctions
 from efg.quadrature import background
 from fem_reference.assembly import Shapes, block
 from fem_reference.spaces import PAIRS, Space, cell_bases
-from soil.coupling import Scales
 from soil.errors import require
 from soil.infsup import coefficients, inf_sup
 from soil.problems import load_case
@@ -194,7 +195,8 @@ def _fem(case, method):
     u, p = Shapes.of(ub), Shapes.of(pb)
     E, Q = ub.dx.shape
     gram, div, mass, stab = (c.reshape(E, Q, *c.shape[1:]) for c in coefficients(
-        ub.dx.ravel(), case.geometry.height, _perturbation(case, space.pair.stabilised)))
+        ub.dx.ravel(), case.geometry.height,
+        _in_modulus(fem_reference.solver.Model.build(case, method))))
     edge = np.unique(np.concatenate(list(space.u_dofs.values())))
     interior = np.setdiff1d(np.arange(2 * space.n_u), np.concatenate([edge, space.n_u + edge]))
     pair = space.pair
@@ -213,7 +215,7 @@ def _efg(case):
     sp_ = ShapeFunctions.build(nodes, quad.points, s.weight_p, s.scale_p, key="efg.scale_p")
     gram, div, mass, stab = coefficients(
         quad.weights, case.geometry.height,
-        _perturbation(case, s.stabilisation == "perturbation") * s.stabilisation_factor)
+        _in_modulus(efg.solver.Model.build(case)))
     samples = boundary_points(nodes, loop, segment_edges(nodes, loop, case.geometry),
                               order=SAMPLES)
     at_boundary = ShapeFunctions.build(nodes, samples.points, s.weight_u, s.scale_u,
@@ -232,10 +234,7 @@ def _efg_block(test, trial, coeff):
                           coeff.shape[3])
 
 
-def _perturbation(case, stabilised):
-    """The solvers' flow-equation perturbation times the P-wave modulus [m2] (the units
-    of ``S``), or 0 for an unstabilised pair."""
-    if not stabilised:
-        return 0.0
-    scales = Scales.of(case, case.material())
-    return scales.perturbation * scales.modulus
+def _in_modulus(model):
+    """A solver model's flow-equation perturbation ``beta`` (0 when unstabilised) times
+    the P-wave modulus [m2]: the units of ``S``."""
+    return model.beta * model.scales.modulus

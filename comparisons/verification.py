@@ -177,6 +177,13 @@ def table2(scales=TABLE2_SCALES, combinations=COMBINATIONS, permeabilities=(0.0,
     return pd.DataFrame(rows)
 
 
+def _scaled_step(base, ny):
+    """The column's first step on ``ny`` nodes along it, scaled with h^2 from the built-in
+    ``base`` (so ``h^2 / (c_v dt)`` stays that of the built-in column) [s]."""
+    h = base.geometry.height / (ny - 1)
+    return float(base.times()[1]) * (h / base.spacing[1]) ** 2
+
+
 def _pollution(result):
     """``overshoot``, ``interior`` and ``rating`` of a column run's first step
     (:func:`comparisons.metrics.column_pollution`)."""
@@ -209,13 +216,12 @@ def perturbation_factors(factors=(1, 2, 4, 8), grids=((3, 21), (5, 41), (9, 81))
     from comparisons import infsup
 
     base = load_case("soil-column")
-    h0, dt0 = base.spacing[1], float(base.times()[1])
     rows = []
     for factor in factors:
         o = ("efg.stabilisation=perturbation", f"efg.stabilisation_factor={factor}")
         specs = [("soil-column", ("material.permeability=0.0", f"discretisation.nx={nx}",
                                   f"discretisation.ny={ny}", "time.steps=1",
-                                  f"time.end={dt0 * (base.geometry.height / (ny - 1) / h0) ** 2!r}",
+                                  f"time.end={_scaled_step(base, ny)!r}",
                                   *o)) for nx, ny in grids]
         specs.append(("terzaghi", ("discretisation.nx=5", "discretisation.ny=41", *o)))
         *columns, terzaghi = _results(specs)
@@ -288,11 +294,10 @@ def column_stability(permeabilities=(0.0, 1e-5), grids=((3, 21), (5, 41), (9, 81
         ``permeability, nodes, h, dt, method, overshoot, interior, rating``.
     """
     base = load_case("soil-column")
-    h0, dt0 = base.spacing[1], float(base.times()[1])
     settings = list(itertools.product(permeabilities, grids, methods.items()))
     specs = []
     for k, (nx, ny), (_, (method, extra)) in settings:
-        dt = dt0 * (base.geometry.height / (ny - 1) / h0) ** 2
+        dt = _scaled_step(base, ny)
         specs.append(("soil-column", (f"material.permeability={k}", f"discretisation.nx={nx}",
                                       f"discretisation.ny={ny}", "time.steps=1",
                                       f"time.end={dt!r}", *extra), method))
