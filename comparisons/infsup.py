@@ -18,10 +18,12 @@ displacement values at :data:`SAMPLES` Gauss points per boundary segment (singul
 below :data:`RCOND` of the largest count as zero): ``v`` vanishes there, not by penalty.
 Under ``dirichlet`` the constant pressure is a zero mode of every pair and is not counted.
 
-Stabilised pairs (``fem-p1p1-stab``, EFG with ``efg.stabilisation = "perturbation"``)
-add their pressure term to the Schur complement: ``B S^-1 B^T + (h^2/4) L``, L the
-pressure Laplacian, which is the solvers' flow-equation perturbation ``beta = h^2 / (4 M)``
-(:attr:`soil.coupling.Scales.perturbation`) in units of the P-wave modulus M.
+Stabilised pairs add their pressure term to the Schur complement, in units of the P-wave
+modulus M: ``fem-p1p1-stab`` and EFG with ``efg.stabilisation = "perturbation"`` add
+``(h^2/4) L``, L the pressure Laplacian (the solvers' ``beta = h^2 / (4 M)``,
+:attr:`soil.coupling.Scales.perturbation`); EFG with ``"projection"`` adds ``(M/G) F``, F
+the cell-fluctuation form on the background cells (``tau = 1/G``,
+:func:`soil.weakform.fluctuation`). Both are times ``efg.stabilisation_factor``.
 """
 
 import os
@@ -44,6 +46,7 @@ from fem_reference.assembly import Shapes, block
 from fem_reference.spaces import PAIRS, Space, cell_bases
 from soil.errors import require
 from soil.infsup import coefficients, inf_sup
+from soil.weakform import fluctuation
 from soil.problems import load_case
 from soil.schema import apply_override
 from soil.validation import case_from_dict
@@ -178,7 +181,8 @@ REPORT_EFG = {f"{label}, scale {scale:g}": (f"efg.weight_u={u}", f"efg.weight_p=
                                     "E-A/E-A": ("exp:0.5", "exp:0.5"),
                                     "E-A/E-B": ("exp:0.5", "exp:0.25")}.items()
               for scale in (1.3, 2.0)}
-REPORT_EFG["Q/Q, scale 1.3, perturbation"] = ("efg.stabilisation=perturbation",)
+REPORT_EFG.update({f"Q/Q, scale 1.3, {kind}": (f"efg.stabilisation={kind}",)
+                   for kind in ("perturbation", "projection")})
 
 
 def report_table(sizes=SIZES):
@@ -213,18 +217,21 @@ def _efg(case):
     quad = background(case, nodes, loop, s)
     su = ShapeFunctions.build(nodes, quad.points, s.weight_u, s.scale_u, key="efg.scale_u")
     sp_ = ShapeFunctions.build(nodes, quad.points, s.weight_p, s.scale_p, key="efg.scale_p")
-    gram, div, mass, stab = coefficients(
-        quad.weights, case.geometry.height,
-        _in_modulus(efg.solver.Model.build(case)))
+    model = efg.solver.Model.build(case)
+    gram, div, mass, stab = coefficients(quad.weights, case.geometry.height,
+                                         _in_modulus(model))
+    C = _efg_block(sp_, sp_, stab) + (model.tau * model.scales.modulus
+                                      * fluctuation(sp_.phi, quad.weights, quad.cell))
     samples = boundary_points(nodes, loop, segment_edges(nodes, loop, case.geometry),
                               order=SAMPLES)
     at_boundary = ShapeFunctions.build(nodes, samples.points, s.weight_u, s.scale_u,
                                        key="efg.scale_u").phi.toarray()
     zero = sla.null_space(at_boundary, rcond=RCOND)
     return {"S": _efg_block(su, su, gram), "B": _efg_block(sp_, su, div),
-            "T": _efg_block(sp_, sp_, mass), "C": _efg_block(sp_, sp_, stab),
+            "T": _efg_block(sp_, sp_, mass), "C": C,
             "free": None, "dirichlet": sla.block_diag(zero, zero),
-            "weights": f"{s.weight_u}/{s.weight_p}" + ("+stab" if stab.any() else ""),
+            "weights": f"{s.weight_u}/{s.weight_p}" + (
+                f"+{s.stabilisation}" if s.stabilisation != "none" else ""),
             "scale_u": s.scale_u, "scale_p": s.scale_p}
 
 

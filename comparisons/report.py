@@ -85,8 +85,10 @@ TASKS = [
     _table("column ratios", verification.column_ratios, "column_ratios"),
     _table("column skeletons", verification.column_skeletons, "column_skeletons"),
     _table("quadrature orders", verification.quadrature_orders, "quadrature_orders"),
-    _table("perturbation factors", verification.perturbation_factors,
-           "perturbation_factors"),
+    _table("stabilisation factors", verification.stabilisation_factors,
+           "stabilisation_factors"),
+    _table("target infsup", verification.target_infsup, "target_infsup",
+           "stabilisation factors"),
     _table("profiles", verification.column_profiles, "column_profiles"),
     _figure("profiles figure", figures.column_profiles, "column_profiles", "profiles"),
     _table("efg consolidation", verification.consolidation, "efg_consolidation"),
@@ -189,7 +191,7 @@ def _verdicts(uc, bif, fits, col, t2, ec, ft):
     sq, de = (uc.loc[f"EFG, {c}, plain Gauss"] for c in ("squares", "Delaunay"))
     better = sq.err_before > de.err_before and sq.path_error_before > de.path_error_before
     vci = bif.loc[["EFG, square cells", "EFG, Delaunay cells"], "err_before"]
-    plain = fits[(fits.method == "efg") & ~fits.weights.str.endswith("+stab")
+    plain = fits[(fits.method == "efg") & ~fits.weights.str.contains("+", regex=False)
                  & (fits.boundary == "dirichlet")]
     fem = fits.set_index(["method", "boundary"]).slope
     undrained, seeping = (t2[t2.permeability == 0], t2[t2.permeability > 0])

@@ -201,24 +201,25 @@ def nodes_per_support(case):
     return float(np.diff(phi.indptr).mean())
 
 
-def perturbation_factors(factors=(1, 2, 4, 8), grids=((3, 21), (5, 41), (9, 81))):
-    """EFG Q/Q with the flow-equation perturbation times ``efg.stabilisation_factor``:
-    the undrained (k = 0) column's first-step interior pollution per grid (first step
-    scaled with h^2, as in :func:`column_stability`), Terzaghi's error for t >= 0.1
-    (5 x 41 nodes) and the inf-sup test with v = 0 (:func:`comparisons.infsup.measure`).
+def stabilisation_factors(kinds=("perturbation", "projection"), factors=(1, 2, 4, 8),
+                          grids=((3, 21), (5, 41), (9, 81))):
+    """EFG Q/Q with each pressure stabilisation times ``efg.stabilisation_factor``: the
+    undrained (k = 0) column's first-step interior pollution per grid (first step scaled
+    with h^2, as in :func:`column_stability`), Terzaghi's error for t >= 0.1 (5 x 41
+    nodes) and the inf-sup test with v = 0 (:func:`comparisons.infsup.measure`).
 
     Returns
     -------
     pandas.DataFrame
-        ``factor``, ``interior_NxM`` per grid, ``terzaghi``, ``beta`` (n = 33) and
-        ``slope`` (:func:`comparisons.infsup.slopes`).
+        ``stabilisation``, ``factor``, ``interior_NxM`` per grid, ``terzaghi``, ``beta``
+        (n = 33) and ``slope`` (:func:`comparisons.infsup.slopes`).
     """
     from comparisons import infsup
 
     base = load_case("soil-column")
     rows = []
-    for factor in factors:
-        o = ("efg.stabilisation=perturbation", f"efg.stabilisation_factor={factor}")
+    for kind, factor in itertools.product(kinds, factors):
+        o = (f"efg.stabilisation={kind}", f"efg.stabilisation_factor={factor}")
         specs = [("soil-column", ("material.permeability=0.0", f"discretisation.nx={nx}",
                                   f"discretisation.ny={ny}", "time.steps=1",
                                   f"time.end={_scaled_step(base, ny)!r}",
@@ -227,12 +228,42 @@ def perturbation_factors(factors=(1, 2, 4, 8), grids=((3, 21), (5, 41), (9, 81))
         *columns, terzaghi = _results(specs)
         test = infsup.measure(["efg"], boundaries=["dirichlet"], overrides=o)
         fit = infsup.slopes(test).iloc[0]
-        rows.append({"factor": factor,
+        rows.append({"stabilisation": kind, "factor": factor,
                      **{f"interior_{nx}x{ny}": _pollution(r)["interior"]
                         for (nx, ny), r in zip(grids, columns)},
                      "terzaghi": terzaghi_errors(terzaghi)["max_error_load_after_0.1"],
                      "beta": test.beta.iloc[-1], "slope": fit.slope})
     return pd.DataFrame(rows)
+
+
+#: The stabilised EFG's goal: an undrained first-step interior pollution on 5 x 41 nodes
+#: below this fraction of the load.
+TARGET = 0.02
+
+
+def target_infsup(factors, target=TARGET, sizes=(17, 33, 65)):
+    """The inf-sup test with v = 0 one refinement further (n = 65), for the smallest
+    factor of each stabilisation that meets ``target`` in :func:`stabilisation_factors`
+    (``factors``): whether its beta, still falling at n = 33, levels off.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``stabilisation, factor, n, beta, zero_modes`` and the group's ``slope`` and
+        ``stable`` (:func:`comparisons.infsup.slopes`); empty when no factor meets it.
+    """
+    from comparisons import infsup
+
+    tables = []
+    for kind, part in factors[factors["interior_5x41"] < target].groupby("stabilisation"):
+        factor = part.factor.min()
+        test = infsup.measure(["efg"], sizes, boundaries=["dirichlet"], overrides=(
+            f"efg.stabilisation={kind}", f"efg.stabilisation_factor={factor}"))
+        fit = infsup.slopes(test).iloc[0]
+        tables.append(test[["n", "beta", "zero_modes"]].assign(
+            stabilisation=kind, factor=factor, slope=fit.slope, stable=fit.stable))
+    columns = ["stabilisation", "factor", "n", "beta", "zero_modes", "slope", "stable"]
+    return pd.concat(tables)[columns] if tables else pd.DataFrame(columns=columns)
 
 
 def quadrature_orders(orders=(2, 4, 6), combinations=COMBINATIONS):
@@ -278,7 +309,8 @@ FEM_METHODS = ("fem-th", "fem-p1p1", "fem-p1p1-stab", "fem-q1q1", "fem-q2q1")
 STABILITY_METHODS = {"fem-th": ("fem-th", ()), "fem-p1p1": ("fem-p1p1", ()),
                      "fem-p1p1-stab": ("fem-p1p1-stab", ()), "efg Q/Q": ("efg", ()),
                      "efg E-A/E-B": ("efg", ("efg.weight_u=exp:0.5", "efg.weight_p=exp:0.25")),
-                     "efg Q/Q, perturbation": ("efg", ("efg.stabilisation=perturbation",))}
+                     "efg Q/Q, perturbation": ("efg", ("efg.stabilisation=perturbation",)),
+                     "efg Q/Q, projection": ("efg", ("efg.stabilisation=projection",))}
 
 
 def column_stability(permeabilities=(0.0, 1e-5), grids=((3, 21), (5, 41), (9, 81)),

@@ -42,6 +42,8 @@ class Quadrature(NamedTuple):
     cells : ndarray, shape (C, V, 2)
         Vertices of the cells that carry at least one point, counter-clockwise [m]: V = 4
         for squares (full cells first, then quarter cells), V = 3 for triangles.
+    cell : ndarray of int, shape (M,)
+        The cell each point lies in (an index into ``cells``).
     triangles : ndarray of int, shape (C, 3), or None
         Node indices of the Delaunay triangles (``cells == nodes[triangles]``); None for
         square cells.
@@ -50,6 +52,7 @@ class Quadrature(NamedTuple):
     points: np.ndarray
     weights: np.ndarray
     cells: np.ndarray
+    cell: np.ndarray
     triangles: np.ndarray | None = None
 
 
@@ -117,10 +120,14 @@ def square_cells(boundary, spacing, order=2):
     fp, fw = _gauss_squares(full, h, order)
     qp, qw = _gauss_squares(quarter, h / 2, order)
     keep = _path(boundary).contains_points(qp.reshape(-1, 2)).reshape(qw.shape)
+    kept = keep.any(1)
     cells = np.concatenate([full[:, None] + _SQUARE * h,
-                            quarter[keep.any(1), None] + _SQUARE * h / 2])
+                            quarter[kept, None] + _SQUARE * h / 2])
+    quarter_cell = len(full) + np.cumsum(kept) - 1
+    cell = np.concatenate([np.repeat(np.arange(len(full)), order**2),
+                           np.broadcast_to(quarter_cell[:, None], keep.shape)[keep]])
     return Quadrature(np.concatenate([fp.reshape(-1, 2), qp[keep]]),
-                      np.concatenate([fw.ravel(), qw[keep]]), cells)
+                      np.concatenate([fw.ravel(), qw[keep]]), cells, cell)
 
 
 def delaunay_cells(nodes, boundary, order=2):
@@ -172,7 +179,7 @@ def delaunay_cells(nodes, boundary, order=2):
     xi, w = get_quadrature(RefTri, order)
     points = cells[:, :1] + np.einsum("pj,tjd->tpd", xi.T, cells[:, 1:] - cells[:, :1])
     return Quadrature(points.reshape(-1, 2), (jac[keep, None] * w).ravel(), cells,
-                      triangles[keep])
+                      np.repeat(np.arange(len(cells)), len(w)), triangles[keep])
 
 
 def _gauss_squares(corners, size, order):

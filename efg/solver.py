@@ -89,10 +89,20 @@ class Model:
         """Coefficient of the flow-equation perturbation [m2/kPa] with
         ``efg.stabilisation = "perturbation"`` (times ``efg.stabilisation_factor``), else
         0."""
+        return self._stabilisation("perturbation")
+
+    @property
+    def tau(self):
+        """Coefficient of the polynomial pressure projection [1/kPa] with
+        ``efg.stabilisation = "projection"`` (times ``efg.stabilisation_factor``), else
+        0."""
+        return self._stabilisation("projection")
+
+    def _stabilisation(self, kind):
         s = self.case.efg
-        if s.stabilisation != "perturbation":
+        if s.stabilisation != kind:
             return 0.0
-        return self.scales.perturbation * s.stabilisation_factor
+        return getattr(self.scales, kind) * s.stabilisation_factor
 
 
 def solve(case, progress=True):
@@ -117,6 +127,7 @@ def solve(case, progress=True):
                partial(_step, model), partial(_history_row, model),
                partial(_snapshot, model),
                {"dofs": 3 * len(case.nodes()), "stabilisation_beta": model.beta,
+                "stabilisation_tau": model.tau,
                 **_penalties(model, case.times())}, progress)
 
 
@@ -198,6 +209,8 @@ class _System:
         R_u -= np.concatenate([disc.sub.phi.T @ (disc.bp.weights * self.traction[:, f])
                                for f in range(2)])
         R_p = _tested(disc.tp, r[:, 2])
+        if model.tau:
+            R_p -= model.tau * (disc.fluctuation @ (self.p - points.p))
         pb = disc.spb.phi @ self.p
         R_p -= disc.spb.phi.T @ (self.alpha_p * disc.bp.weights * bc.drained * pb)
         extra_R = []
@@ -271,7 +284,12 @@ def _tangent(model, disc, stress, total, tangent, J, Finv, dt, alpha_u, alpha_p)
     constrained = bc.constrained | np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
     pen[:, :2, :, :2, :] = penalty_coefficients(disc.bp, constrained, alpha_u)
     pen[:, 2, 0, 2, 0] = -alpha_p * disc.bp.weights * bc.drained
-    return disc.tangent(coeff, pen)
+    K = disc.tangent(coeff, pen)
+    if not model.tau:
+        return K
+    n = disc.fluctuation.shape[0]
+    return K - model.tau * sp.block_diag([sp.csr_matrix((2 * n, 2 * n)),
+                                          disc.fluctuation], format="csr")
 
 
 def _uniqueness(model, disc, K, n):
@@ -329,11 +347,18 @@ class _Discretisation:
     bc: object
     at_points: object
     patterns: dict
+    cell: np.ndarray
 
     @property
     def shared(self):
         """True when u and p_w use the same shape functions: one three-field pattern."""
         return self.tu is self.tp and self.su is self.sp and self.sub is self.spb
+
+    @cached_property
+    def fluctuation(self):
+        """:func:`soil.weakform.fluctuation` of the MLS pressure over the background
+        cells."""
+        return weakform.fluctuation(self.sp.phi, self.w, self.cell)
 
     @cached_property
     def boundary_magnitudes(self):
@@ -399,7 +424,7 @@ def _discretise(model, nodes, evaluation, timings):
         n = len(nodes)
         at_points = _AtPoints(_rows(at, slice(0, n)), _rows(at, slice(n, None)))
         disc = _Discretisation(quad.weights, su, sp_, tu, tp, bp, sub, spb,
-                               conditions(case, bp), at_points, {})
+                               conditions(case, bp), at_points, {}, quad.cell)
     with timed(timings, "assembly_s"):
         disc.patterns.update({name: Pattern.build(*pairs)
                               for name, pairs in disc.blocks.items()})

@@ -56,6 +56,8 @@ class Scales:
         True for a confined body (no free or rigid component, no drained edge) with
         incompressible constituents: its pore pressure is defined up to a constant, and
         the solvers pin the mean change to zero.
+    shear : float
+        Shear modulus G at the initial state [kPa].
 
     A step has converged when the displacement residual is below ``TOLERANCE x stress x
     h`` (force per unit thickness) and the continuity residual below ``TOLERANCE x
@@ -67,6 +69,7 @@ class Scales:
     modulus: float
     h: float
     pin_pressure: bool
+    shear: float
 
     @classmethod
     def of(cls, case, material):
@@ -78,7 +81,8 @@ class Scales:
         free = any({"free", "rigid"} & {e.ux, e.uy} for e in edges)
         pin = case.fluid.storage == 0 and not free and not any(e.drained for e in edges)
         return cls(sigma0, max([abs(stress[0]).max(), *tractions, 1e-12]),
-                   float(material.constrained_modulus()), float(min(case.spacing)), pin)
+                   float(material.constrained_modulus()), float(min(case.spacing)), pin,
+                   float(material.moduli()[1]))
 
     @property
     def perturbation(self):
@@ -86,6 +90,14 @@ class Scales:
         ``-beta int grad(p - p_n) . grad(q)`` of Aguilar, Gaspar, Lisbona and Rodrigo
         (2008), with the initial P-wave modulus M and the smallest nodal spacing h."""
         return self.h**2 / (4 * self.modulus)
+
+    @property
+    def projection(self):
+        """``1 / G`` [1/kPa]: the coefficient of the polynomial pressure projection
+        ``-tau int (dp - Pi dp)(q - Pi q)`` (:func:`soil.weakform.fluctuation`), the
+        inverse viscosity of Dohrmann and Bochev (2004) read as the initial shear
+        modulus of the skeleton."""
+        return 1.0 / self.shear
 
     @property
     def force(self):

@@ -89,8 +89,10 @@ Schema (every case has the same one; unknown keys are an error)::
     correction = "vci"                # consistent test gradients (efg.vci) or "none"
     stabilisation = "none"            # or "perturbation": the flow-equation term
                                       # -h^2/(4M) int grad(p - p_n) . grad(q) of
-                                      # fem-p1p1-stab on the MLS pressure
-    stabilisation_factor = 1.0        # multiplies that h^2/(4M), 0 < factor <= 1000
+                                      # fem-p1p1-stab on the MLS pressure; or
+                                      # "projection": -(1/G) int (dp - Pi dp)(q - Pi q),
+                                      # Pi the mean over each background cell
+    stabilisation_factor = 1.0        # multiplies that h^2/(4M) or 1/G, 0 < f <= 1000
 
 Boundary kinds of a displacement component:
 

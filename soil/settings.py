@@ -31,9 +31,10 @@ CELLS = ("delaunay", "squares")
 """Background integration cells of ``efg.cells``."""
 CORRECTIONS = ("vci", "none")
 """Test-gradient corrections of ``efg.correction``."""
-STABILISATIONS = ("none", "perturbation")
-"""Pressure stabilisations of ``efg.stabilisation``: none, or the flow-equation
-perturbation (:attr:`soil.coupling.Scales.perturbation`)."""
+STABILISATIONS = ("none", "perturbation", "projection")
+"""Pressure stabilisations of ``efg.stabilisation``: none, the flow-equation perturbation
+(:attr:`soil.coupling.Scales.perturbation`) or the polynomial pressure projection on the
+background cells (:attr:`soil.coupling.Scales.projection`)."""
 
 
 def weight_form(name, key=None):
@@ -149,10 +150,12 @@ class EFGSettings:
     factor relative to the stiffness scale (P-wave modulus over nodal spacing);
     ``correction`` is ``vci`` (variationally consistent test-function gradients, which
     pass the patch test with any quadrature; :mod:`efg.vci`) or ``none`` (plain Gauss
-    quadrature of the MLS gradients, as in the paper); ``stabilisation`` is ``none`` or
+    quadrature of the MLS gradients, as in the paper); ``stabilisation`` is ``none``,
     ``perturbation``, the flow-equation term of Aguilar et al. (2008) that
-    ``fem-p1p1-stab`` adds, on the MLS pressure (:mod:`soil.weakform`), with its
-    coefficient ``h^2 / (4 M)`` multiplied by ``stabilisation_factor`` (dimensionless).
+    ``fem-p1p1-stab`` adds, on the MLS pressure (:mod:`soil.weakform`), coefficient
+    ``h^2 / (4 M)``, or ``projection``, the polynomial pressure projection of Dohrmann
+    and Bochev (2004) on the background cells (:func:`soil.weakform.fluctuation`),
+    coefficient ``1 / G``; ``stabilisation_factor`` (dimensionless) multiplies either.
 
     Examples
     --------

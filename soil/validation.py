@@ -331,7 +331,8 @@ def _efg(table):
     require(values["penalty"] > 0, f"efg.penalty = {values['penalty']:g} must be positive")
     factor = values["stabilisation_factor"]
     require(0 < factor <= 1e3, f"efg.stabilisation_factor = {factor:g} must be in (0, 1000] "
-            "(it multiplies the perturbation h^2/(4M); 1 is fem-p1p1-stab's)")
+            "(it multiplies the stabilisation's coefficient, h^2/(4M) or 1/G; 1 is the "
+            "published one)")
     return EFGSettings(**values)
 
 

@@ -10,6 +10,11 @@ Both solvers discretise the same two equations on the start-of-step configuratio
   gamma_w) grad(p) + beta grad(p - p_n)] dOmega_n`` (Darcy flux ``-(k/gamma_w) grad p``;
   ``beta`` the optional pressure stabilisation of :mod:`fem_reference.solver`).
 
+The other pressure stabilisation, the polynomial pressure projection of Dohrmann and
+Bochev (2004), is not an integrand at points but a form over cells: ``-tau int (dp -
+Pi dp)(q - Pi q)`` with ``dp = p - p_n`` and Pi the L2 projection onto cell-wise
+constants (:func:`fluctuation`).
+
 A solver supplies test and trial functions and scatters the coefficients returned here.
 They are per integration point, quadrature weight included, in the layout both
 assemblies use: fields ``(ux, uy, p)`` and slots ``(value, d/dx, d/dy)`` on x_n.
@@ -19,6 +24,7 @@ linearisation in the trial field g, slot t.
 """
 
 import numpy as np
+import scipy.sparse as sp
 
 from soil.kinematics import IDENTITY, in_plane, spatial_tangent
 
@@ -89,3 +95,43 @@ def _pulled_back(A, Finv):
     right = A.reshape(M, 8, 2) @ np.swapaxes(Finv, 1, 2)               # (m, f k g, j)
     left = Finv[:, None] @ right.reshape(M, 2, 2, 4)                   # (m, f, i, g j)
     return left.reshape(M, 2, 2, 2, 2)
+
+
+def fluctuation(phi, w, cell):
+    """The cell-fluctuation form ``int (p - Pi p)(q - Pi q) dOmega`` [m2], Pi the L2
+    projection onto constants on each cell (Dohrmann and Bochev 2004).
+
+    Parameters
+    ----------
+    phi : sparse matrix, shape (M, N)
+        Pressure shape functions at the integration points.
+    w : ndarray, shape (M,)
+        Quadrature weights [m2].
+    cell : ndarray of int, shape (M,)
+        The cell each point belongs to.
+
+    Returns
+    -------
+    sparse matrix, shape (N, N)
+        Symmetric, positive semi-definite; zero on fields that are constant on every
+        cell: ``phi^T W phi - A^T |c|^-1 A`` with ``A = int_c phi`` per cell.
+
+    Examples
+    --------
+    Two 1-D cells [0, 1] and [1, 2], hat functions at x = 0, 1, 2 and the two-point Gauss
+    rule: the field 1, 1, 1 is constant on both cells, so it is in the null space.
+
+    >>> x = 0.5 + np.array([-1, 1]) / (2 * np.sqrt(3))
+    >>> hats = np.column_stack([1 - x, x, 0 * x])
+    >>> phi = sp.csr_matrix(np.vstack([hats, np.roll(hats, 1, axis=1)]))
+    >>> F = fluctuation(phi, np.full(4, 0.5), np.array([0, 0, 1, 1]))
+    >>> bool(np.allclose(F @ np.ones(3), 0)), round(float(F[1, 1]), 4)
+    (True, 0.1667)
+    """
+    phi = sp.csr_matrix(phi)
+    cell = np.asarray(cell)
+    rows = sp.csr_matrix((w, (cell, np.arange(len(w)))), shape=(cell.max() + 1, len(w)))
+    A = rows @ phi
+    area = np.asarray(rows.sum(axis=1)).ravel()
+    mass = phi.T @ sp.diags(w) @ phi
+    return (mass - A.T @ sp.diags(1.0 / area) @ A).tocsr()

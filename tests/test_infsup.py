@@ -90,9 +90,10 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, args, word):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_equal_order_efg_decays_and_its_perturbation_levels_off():
+@pytest.mark.parametrize("kind", ["perturbation", "projection"])
+def test_equal_order_efg_decays_and_its_stabilisation_levels_off(kind):
     sizes = (5, 9, 13, 17)
     plain = slopes(measure(["efg"], sizes)).set_index("boundary")
-    stable = slopes(measure(["efg"], sizes, overrides=["efg.stabilisation=perturbation"]))
+    stable = slopes(measure(["efg"], sizes, overrides=[f"efg.stabilisation={kind}"]))
     assert not plain.stable.any() and (plain.slope > 0.5).all()
     assert stable.stable.all()

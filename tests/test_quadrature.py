@@ -77,6 +77,16 @@ def test_weights_sum_to_the_area(nx, ny, layout):
 
 
 @pytest.mark.parametrize("nx, ny, layout", [(7, 9, "grid+centres"), (5, 4, "grid")])
+def test_each_point_lies_in_its_cell_and_each_cell_holds_its_area(nx, ny, layout):
+    for q in both(specimen(nx, ny, layout)):
+        for c in np.unique(q.cell):
+            mine = q.cell == c
+            assert Path(q.cells[c]).contains_points(q.points[mine]).all()
+            assert q.weights[mine].sum() == pytest.approx(shoelace(q.cells[c]), rel=1e-12)
+        assert set(q.cell) == set(range(len(q.cells)))
+
+
+@pytest.mark.parametrize("nx, ny, layout", [(7, 9, "grid+centres"), (5, 4, "grid")])
 def test_quarter_cells_form_the_ring_along_the_boundary(nx, ny, layout):
     case = specimen(nx, ny, layout)
     q, _ = both(case)
