@@ -165,12 +165,14 @@ KEYS = {
     "diagnostics": ("uniqueness",),
     "initial": ("pore_pressure",),
     "edge": ("ux", "uy", "displacement", "traction", "water"),
+    "segment": ("from", "to", "ux", "uy", "water", "settlement_rate", "force"),
     "loading": ("velocity_gradient", "load"),
     "time": ("end", "steps", "dt0", "growth", "dt_max"),
     "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "cells", "order", "penalty",
             "correction", "stabilisation", "stabilisation_factor"),
 }
-"""The keys each section accepts (``edge``: each ``[boundary.<side>]``). ``[material]``,
+"""The keys each section accepts (``edge``: each ``[boundary.<side>]``, which also takes
+named segments as sub-tables; ``segment``: each ``[boundary.<side>.<name>]``). ``[material]``,
 ``[probes]`` and ``[exact]`` take the keys of the material, the probe names and the
 solution's parameters."""
 GEOMETRIC = ("dt0", "growth", "dt_max")
