@@ -18,8 +18,10 @@ the run stops with one error naming the step time.
 
 Essential conditions are exact: fixed and prescribed displacement DOFs
 (``(exp(L dt) - I) x_n`` at the DOF's current position) and drained pressure DOFs
-(p_w = 0) are eliminated; a rigid plate ties every uy DOF of its edge to one unknown
-whose equation is the plate's total force; a confined body with incompressible
+(p_w = 0) are eliminated, and so are the uy DOFs of a velocity-controlled footing
+(increment -rate x dt); a rigid plate (or a load-controlled footing) ties every uy DOF of
+its edge (segment) to one unknown whose equation is the plate's total force; the
+reaction of a named segment is the residual summed over its uy DOFs; a confined body with incompressible
 constituents and no drained edge gets the mean-pressure pin of the EFG solver (one
 Lagrange multiplier).
 
