@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from soil.kinematics import prescribed_increment
+
 
 @dataclass(frozen=True)
 class BoundaryPoints:
@@ -82,29 +84,38 @@ def boundary_points(nodes, loop, edges, order=BOUNDARY_ORDER):
 
 @dataclass(frozen=True)
 class Conditions:
-    """Kinds of condition at each boundary point, from the case's edges.
+    """Kinds of condition at each boundary point, from the case's edges and segments.
 
     Attributes
     ----------
     kind : ndarray of str, shape (G, 2)
-        ``free``, ``fixed``, ``prescribed``, ``exact`` or ``rigid`` per component.
+        ``free``, ``fixed``, ``prescribed``, ``exact``, ``rigid`` (the plate: a ``rigid``
+        edge or a load-controlled footing) or ``footing`` (uy of a velocity-controlled
+        footing) per component.
     traction : ndarray, shape (G, 2)
-        The edge's traction [stress unit] (zero where ``exact``; see ``exact_traction``).
+        The edge's traction [stress unit] (zero where ``exact``, see ``exact_traction``,
+        and on named segments, which carry none).
     exact_traction : ndarray of bool, shape (G,)
         Whether the edge takes its traction from the case's exact solution.
     drained : ndarray of bool, shape (G,)
         Whether p_w = 0 is imposed.
+    segment : ndarray of int, shape (G,)
+        Index into ``case.boundary.segments()`` of each point's segment, -1 for none.
+    rate : ndarray, shape (G,)
+        Settlement rate [m/s, positive down] of a velocity-controlled footing, else 0.
     """
 
     kind: np.ndarray
     traction: np.ndarray
     exact_traction: np.ndarray
     drained: np.ndarray
+    segment: np.ndarray
+    rate: np.ndarray
 
     @property
     def constrained(self):
         """(G, 2) bool: components whose displacement is imposed by penalty."""
-        return np.isin(self.kind, ("fixed", "prescribed", "exact"))
+        return np.isin(self.kind, ("fixed", "prescribed", "exact", "footing"))
 
     @property
     def loaded(self):
@@ -117,17 +128,43 @@ class Conditions:
         """(G,) bool: points whose uy follows the rigid plate."""
         return self.kind[:, 1] == "rigid"
 
+    def target_increment(self, L, points, dt):
+        """(G, 2) increment of the imposed displacement over a step dt [m]: ``(exp(L dt) -
+        I) x`` on ``prescribed`` components (at the current points x), ``-rate dt`` on a
+        footing's uy, 0 elsewhere."""
+        du = np.where(self.kind == "prescribed", prescribed_increment(L, points, dt), 0.0)
+        du[:, 1] -= self.rate * dt
+        return du
 
-def conditions(case, bpoints):
-    """The case's boundary conditions at the boundary points (vectorised over edges)."""
-    edges = [edge for _, edge in case.boundary.items()]
-    pick = bpoints.edge
-    kind = np.array([[e.ux, e.uy] for e in edges])[pick]
-    exact = np.array([e.traction == "exact" for e in edges])
-    traction = np.array([(0.0, 0.0) if e.traction == "exact" else e.traction
-                         for e in edges])[pick]
-    drained = np.array([e.drained for e in edges])[pick]
-    return Conditions(kind, traction, exact[pick], drained)
+
+def conditions(case, bpoints, initial=None):
+    """The case's boundary conditions at the boundary points (vectorised per edge).
+
+    Parameters
+    ----------
+    case : Case
+    bpoints : BoundaryPoints
+    initial : ndarray, shape (G, 2), optional
+        The points' positions in the initial configuration [m], which decide whether a
+        point lies on a named segment; ``bpoints.points`` by default.
+    """
+    initial = bpoints.points if initial is None else initial
+    G = len(bpoints.weights)
+    kind, drained = np.full((G, 2), "free", dtype="<U10"), np.zeros(G, bool)
+    segment, traction = np.full(G, -1), np.zeros((G, 2))
+    exact = np.zeros(G, bool)
+    first = 0
+    for k, (side, edge) in enumerate(case.boundary.items()):
+        on = bpoints.edge == k
+        kind[on], drained[on], seg = case.edge_conditions(side, initial[on])
+        segment[on] = np.where(seg >= 0, seg + first, -1)
+        exact[on] = edge.traction == "exact"
+        if edge.traction != "exact":
+            traction[on] = np.where(seg[:, None] >= 0, 0.0, edge.traction)
+        first += len(edge.segments)
+    rates = np.array([seg.settlement_rate if seg.footing and not seg.load_controlled
+                      else 0.0 for _, seg in case.boundary.segments()] + [0.0])
+    return Conditions(kind, traction, exact, drained, segment, rates[segment])
 
 
 def penalty_coefficients(bpoints, constrained, alpha):

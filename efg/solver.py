@@ -25,8 +25,10 @@ that enters ERR, paper eq. 1) and move by ``u^h(x_I)``.
 
 Essential conditions are penalties on total quantities: each boundary Gauss point keeps
 the gap ``u^h - u_bar`` of its constrained components, so reactions carried in earlier
-steps are not lost. A rigid plate (Mandel) adds one unknown, its settlement; its total
-force equals the edge load. When no boundary is drained or free and the constituents are
+steps are not lost (a velocity-controlled footing's uy target is -rate x t). A rigid plate
+(Mandel) or a load-controlled footing adds one unknown, its settlement; its total force
+equals the edge load or the footing's force. The reaction of each named segment is the
+penalty (or plate) force over its points, ``-sum alpha w gap_y``. When no boundary is drained or free and the constituents are
 incompressible, the pore pressure is defined up to a constant: the mean change of p_w over
 the domain is then pinned to zero by one Lagrange multiplier.
 """
@@ -46,7 +48,7 @@ from efg.mls import ShapeFunctions
 from soil import weakform
 from soil.bifurcation import h1_gram, restricted_eigenvalue
 from soil.coupling import Scales, history_row, material_update, newton, run, timed
-from soil.kinematics import cauchy_traction, invariants, prescribed_increment
+from soil.kinematics import cauchy_traction, invariants
 from soil.case import EDGES
 from soil.results import Snapshot
 
@@ -65,6 +67,7 @@ class Points:
     probes: np.ndarray       # (P, 2) current probe positions
     stretching: np.ndarray   # (N, 4) nodal stretching D^I of the last step [1/s]
     uniqueness: float = 0.0  # soil.bifurcation indicator of the last step (if asked for)
+    reactions: np.ndarray = None  # (S,) vertical force on the soil per named segment
 
 
 @dataclass
@@ -76,13 +79,15 @@ class Model:
     loop: np.ndarray
     edges: np.ndarray
     scales: Scales
+    initial_bp: np.ndarray   # (G, 2) boundary points in the initial configuration [m]
 
     @classmethod
     def build(cls, case):
         material = case.material()
         loop = case.boundary_loop()
-        return cls(case, material, loop, segment_edges(case.nodes(), loop, case.geometry),
-                   Scales.of(case, material))
+        edges = segment_edges(case.nodes(), loop, case.geometry)
+        return cls(case, material, loop, edges, Scales.of(case, material),
+                   boundary_points(case.nodes(), loop, edges).points)
 
     @property
     def beta(self):
@@ -140,7 +145,8 @@ def _initial_points(model):
                   p=np.full(len(nodes), case.initial_pore_pressure),
                   gap=np.zeros((n_bp, 2)), plate=0.0, plate_gap=np.zeros(n_bp),
                   probes=np.array([p.point for p in case.probes]).reshape(-1, 2),
-                  stretching=np.zeros((len(nodes), 4)))
+                  stretching=np.zeros((len(nodes), 4)),
+                  reactions=np.zeros(len(case.boundary.segments())))
 
 
 def _step(model, points, t0, t1, stats):
@@ -171,7 +177,7 @@ class _System:
         self.state_n = {k: su.phi @ v for k, v in points.state.items()}
         self.p_n = disc.sp.phi @ points.p
         self.grad_p_n = np.stack([disc.sp.dphi_dx @ points.p, disc.sp.dphi_dy @ points.p], 1)
-        self.du_bar = prescribed_increment(case.loading.L, disc.bp.points, self.dt)
+        self.du_bar = bc.target_increment(case.loading.L, disc.bp.points, self.dt)
         self.alpha_u, self.alpha_p = _penalties(model, [0.0, self.dt]).values()
         self.traction = (cauchy_traction(model.scales.sigma0, disc.bp.normal)
                          + bc.traction * bc.loaded * case.loading.factor(t1))
@@ -256,12 +262,18 @@ class _System:
             self.model.material, points.stress, points.state,
             _gradient(at.nodes, self.du, n), self.timings, "a node")
         move = self.du.reshape(2, n).T
+        bc = disc.bc
+        force = -(self.alpha_u * disc.bp.weights * bc.constrained[:, 1] * self.gap[:, 1]
+                  + self.rigid_w * self.plate_gap)
+        on = bc.segment >= 0
+        reactions = np.bincount(bc.segment[on], force[on],
+                                minlength=len(self.model.case.boundary.segments()))
         return Points(nodes=points.nodes + at.nodes.phi @ move, stress=stress, state=state,
                       p=self.p, gap=np.where(disc.bc.constrained, self.gap, 0.0),
                       plate=self.plate,
                       plate_gap=np.where(disc.bc.rigid, self.plate_gap, 0.0),
                       probes=points.probes + at.probes.phi @ move,
-                      stretching=deps / self.dt)
+                      stretching=deps / self.dt, reactions=reactions)
 
 
 def _tested(shape, r):
@@ -424,7 +436,8 @@ def _discretise(model, nodes, evaluation, timings):
         n = len(nodes)
         at_points = _AtPoints(_rows(at, slice(0, n)), _rows(at, slice(n, None)))
         disc = _Discretisation(quad.weights, su, sp_, tu, tp, bp, sub, spb,
-                               conditions(case, bp), at_points, {}, quad.cell)
+                               conditions(case, bp, model.initial_bp), at_points, {},
+                               quad.cell)
     with timed(timings, "assembly_s"):
         disc.patterns.update({name: Pattern.build(*pairs)
                               for name, pairs in disc.blocks.items()})
@@ -488,9 +501,14 @@ def _history_row(model, points, t, dt, info):
                                      key="efg.scale_p")
         probes = zip([pr.name for pr in case.probes], shape.phi @ points.p)
     uniqueness = points.uniqueness if case.diagnostics.uniqueness else None
+    nodes0 = case.nodes()
+    segments = [(seg, points.nodes[k], nodes0[k], force,
+                 points.plate if seg.load_controlled else None)
+                for (_, seg), k, force in zip(case.boundary.segments(), case.segment_nodes(),
+                                              points.reactions)]
     return history_row(case, t, dt, info, points.stress, points.stretching,
-                       points.nodes[top], case.nodes()[top], probes=probes,
-                       uniqueness=uniqueness)
+                       points.nodes[top], nodes0[top], probes=probes,
+                       uniqueness=uniqueness, segments=segments)
 
 
 def _snapshot(model, points, t):

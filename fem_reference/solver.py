@@ -18,8 +18,10 @@ the run stops with one error naming the step time.
 
 Essential conditions are exact: fixed and prescribed displacement DOFs
 (``(exp(L dt) - I) x_n`` at the DOF's current position) and drained pressure DOFs
-(p_w = 0) are eliminated; a rigid plate ties every uy DOF of its edge to one unknown
-whose equation is the plate's total force; a confined body with incompressible
+(p_w = 0) are eliminated, and so are the uy DOFs of a velocity-controlled footing
+(increment -rate x dt); a rigid plate (or a load-controlled footing) ties every uy DOF of
+its edge (segment) to one unknown whose equation is the plate's total force; the
+reaction of a named segment is the residual summed over its uy DOFs; a confined body with incompressible
 constituents and no drained edge gets the mean-pressure pin of the EFG solver (one
 Lagrange multiplier).
 
@@ -100,7 +102,18 @@ class Constraints:
     drained : ndarray of int
         Pressure unknowns held at p_w = 0.
     plate : ndarray of int
-        uy unknowns tied to the rigid plate.
+        uy unknowns tied to the rigid plate (a ``rigid`` edge or a load-controlled
+        footing).
+    footing : ndarray of int
+        uy unknowns of velocity-controlled footings, moving by ``-rate dt`` per step;
+        ``rate`` [m/s, positive down] is each one's settlement rate.
+    rate : ndarray
+    segment_dofs : list of ndarray of int
+        uy unknowns of each named segment (``case.boundary.segments()`` order), whose
+        residuals sum to the segment's vertical reaction.
+    unloaded : dict
+        Per edge name, (F,) bool over its facets: facets on a named segment, which
+        carry no edge traction.
     T : scipy.sparse.csr_matrix
         Full increment = ``T @ reduced``: free unknowns, then the plate (if any).
     is_u : ndarray of bool
@@ -112,36 +125,61 @@ class Constraints:
     component: np.ndarray
     drained: np.ndarray
     plate: np.ndarray
+    footing: np.ndarray
+    rate: np.ndarray
+    segment_dofs: list
+    unloaded: dict
     T: object
     is_u: np.ndarray
 
     @classmethod
     def build(cls, case, space):
+        """The DOF sets from the kinds at each boundary DOF's initial position (edge and
+        named segments, :meth:`soil.case.Case.edge_conditions`)."""
         n_u = space.n_u
-        sets = {"fixed": [], "prescribed": [], "rigid": []}
-        component, drained = [], []
+        ub, pb = cell_bases(space.mesh0, space.pair)
+        sets = {"fixed": [], "prescribed": [], "rigid": [], "footing": []}
+        component, drained, rates, segment_dofs, unloaded = [], [], [], [], {}
+        rate_of = np.array([seg.settlement_rate if seg.footing else 0.0
+                            for _, seg in case.boundary.segments()] + [0.0])
+        first = 0
         for name, edge in case.boundary.items():
             dofs = space.u_dofs[name]
-            for f, kind in enumerate((edge.ux, edge.uy)):
-                if kind in sets:
-                    sets[kind].append(f * n_u + dofs)
-                    if kind == "prescribed":
-                        component.append(np.full(len(dofs), f))
-            if edge.drained:
-                drained.append(2 * n_u + space.p_dofs[name])
+            kind, _, seg = case.edge_conditions(name, ub.doflocs[:, dofs].T)
+            for f in range(2):
+                for k in sets:
+                    pick = dofs[kind[:, f] == k]
+                    sets[k].append(f * n_u + pick)
+                    if k == "prescribed":
+                        component.append(np.full(len(pick), f))
+                    if k == "footing":
+                        rates.append(rate_of[first + seg[kind[:, f] == k]])
+            segment_dofs += [n_u + dofs[seg == j] for j in range(len(edge.segments))]
+            pdofs = space.p_dofs[name]
+            _, wet, _ = case.edge_conditions(name, pb.doflocs[:, pdofs].T)
+            drained.append(2 * n_u + pdofs[wet])
+            facets = space.edge_facets[name]
+            mid = space.mesh0.p[:, space.mesh0.facets[:, facets]].mean(axis=1).T
+            unloaded[name] = case.edge_conditions(name, mid)[2] >= 0
+            first += len(edge.segments)
         fixed, plate, drained = (np.unique(np.concatenate(s)) if s else np.zeros(0, int)
                                  for s in (sets["fixed"], sets["rigid"], drained))
+        footing, first_f = np.unique(np.concatenate(sets["footing"]).astype(int),
+                                     return_index=True)
+        rate = np.concatenate(rates or [[]])[first_f]
         prescribed, first = np.unique(np.concatenate(sets["prescribed"] or [[]]).astype(int),
                                       return_index=True)
         component = np.concatenate(component or [[]]).astype(int)[first]
         n = 2 * n_u + space.n_p
-        free = np.setdiff1d(np.arange(n), np.concatenate([fixed, prescribed, drained, plate]))
+        free = np.setdiff1d(np.arange(n), np.concatenate([fixed, prescribed, drained, plate,
+                                                          footing]))
         rows = np.concatenate([free, plate])
         cols = np.concatenate([np.arange(len(free)), np.full(len(plate), len(free))])
         T = sp.csr_matrix((np.ones(len(rows)), (rows, cols)),
                           shape=(n, len(free) + int(len(plate) > 0)))
         is_u = np.append(free < 2 * n_u, np.ones(int(len(plate) > 0), bool))
-        return cls(fixed, prescribed, component, drained, plate, T, is_u)
+        return cls(fixed, prescribed, component, drained, plate, footing, rate,
+                   segment_dofs, unloaded, T, is_u)
 
 
 @dataclass
@@ -156,6 +194,7 @@ class State:
     stretching: np.ndarray   # (E Q, 4) stretching of the last step [1/s]
     velocity: np.ndarray     # (2 n_u,) du/dt of the last step [m/s]: the predictor
     uniqueness: float = 0.0  # soil.bifurcation indicator of the last step (if asked for)
+    reactions: np.ndarray = None  # (S,) vertical force on the soil per named segment
 
 
 def solve(case, method="fem-th", progress=True):
@@ -197,7 +236,8 @@ def _initial_state(model):
     return State(vertices=case.nodes(), stress=stress, state=state,
                  p=np.full(space.n_p, float(case.initial_pore_pressure)),
                  weights=ub.dx.ravel(), stretching=np.zeros((n_points, 4)),
-                 velocity=(case.loading.L @ ub.doflocs).ravel())
+                 velocity=(case.loading.L @ ub.doflocs).ravel(),
+                 reactions=np.zeros(len(case.boundary.segments())))
 
 
 @dataclass
@@ -227,7 +267,8 @@ def _discretise(model, vertices, t1, timings):
             fb = space.facet_basis(mesh, name)
             load = cauchy_traction(model.scales.sigma0, np.moveaxis(fb.normals, 0, -1))
             loaded = np.array([edge.ux, edge.uy]) == "free"
-            load = load + loaded * np.asarray(edge.traction, float) * factor
+            bare = ~model.constraints.unloaded[name][:, None, None]
+            load = load + bare * loaded * np.asarray(edge.traction, float) * factor
             external += Shapes.of(fb).vector(np.concatenate(
                 [(fb.dx[..., None] * load)[..., None], np.zeros(load.shape + (2,))], -1))
     return _Discretisation(Shapes.of(ub), Shapes.of(pb), ub.dx, ub.doflocs, external)
@@ -257,6 +298,7 @@ class _System:
         x[con.prescribed] = prescribed_increment(
             case.loading.L, disc.doflocs.T[con.prescribed % n_u], self.dt)[
             np.arange(len(con.prescribed)), con.component]
+        x[con.footing] = -con.rate * self.dt
         x[con.drained] = 0.0
         self.x, self.lam = x, 0.0
         self.c_mean = np.zeros(len(x))
@@ -275,6 +317,7 @@ class _System:
         R, self.total = _residual(model, disc, self.current, self.x, self.stress, self.J,
                                   self.Finv, self.dt)
         R += self.lam * self.c_mean
+        self.R = R
         reduced = con.T.T @ R
         if len(con.plate):
             reduced[-1] -= model.case.plate_force(self.t1)
@@ -308,9 +351,11 @@ class _System:
         uniqueness = 0.0
         if self.model.case.diagnostics.uniqueness:
             uniqueness = _uniqueness(self.model, self.disc, self.domain_tangent())
+        reactions = np.array([self.R[dofs].sum()
+                              for dofs in self.model.constraints.segment_dofs])
         return State(current.vertices + du, self.stress, self.state, x[2 * n_u:],
                      self.disc.dx.ravel() * self.J, self.deps / self.dt,
-                     x[:2 * n_u] / self.dt, uniqueness)
+                     x[:2 * n_u] / self.dt, uniqueness, reactions)
 
 
 def _residual(model, disc, current, x, stress, J, Finv, dt):
@@ -377,10 +422,17 @@ def _history_row(model, current, t, dt, info):
     probes = ()
     if model.probes is not None:
         probes = zip([pr.name for pr in case.probes], model.probes @ current.p)
+    nodes0 = model.space.mesh0.p.T
+    segments = [(seg, current.vertices[k], nodes0[k], force,
+                 float(current.vertices[k[0], 1] - nodes0[k[0], 1])  # the plate's uy
+                 if seg.load_controlled else None)
+                for (_, seg), k, force in zip(case.boundary.segments(), case.segment_nodes(),
+                                              current.reactions)]
     return history_row(case, t, dt, info, current.stress, current.stretching,
-                       current.vertices[top], model.space.mesh0.p.T[top],
+                       current.vertices[top], nodes0[top],
                        current.weights / current.weights.sum(), probes,
-                       current.uniqueness if case.diagnostics.uniqueness else None)
+                       current.uniqueness if case.diagnostics.uniqueness else None,
+                       segments)
 
 
 def _snapshot(model, current, t):

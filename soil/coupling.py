@@ -47,7 +47,8 @@ class Scales:
     sigma0 : ndarray, shape (4,)
         Initial total stress ``sigma'_0 - alpha p_w0 I`` (tension positive).
     stress : float
-        Stress scale: the largest initial stress or edge traction [kPa].
+        Stress scale: the largest initial stress, edge traction or footing stress
+        (:func:`_footing_stresses`) [kPa].
     modulus : float
         P-wave modulus ``K + 4G/3`` at the initial state [kPa].
     h : float
@@ -78,11 +79,15 @@ class Scales:
         edges = [edge for _, edge in case.boundary.items()]
         tractions = [abs(np.asarray(e.traction, float)).max() for e in edges
                      if e.traction != "exact"]
-        free = any({"free", "rigid"} & {e.ux, e.uy} for e in edges)
-        pin = case.fluid.storage == 0 and not free and not any(e.drained for e in edges)
-        return cls(sigma0, max([abs(stress[0]).max(), *tractions, 1e-12]),
-                   float(material.constrained_modulus()), float(min(case.spacing)), pin,
-                   float(material.moduli()[1]))
+        modulus = float(material.constrained_modulus())
+        free = any({"free", "rigid"} & (kx | ky) for kx, ky in
+                   (edge.kinds(case.edge_length(side)) for side, edge in case.boundary.items()))
+        drained = any(e.drained or any(s.water == "drained" for s in e.segments)
+                      for e in edges)
+        pin = case.fluid.storage == 0 and not free and not drained
+        return cls(sigma0, max([abs(stress[0]).max(), *tractions,
+                                *_footing_stresses(case, modulus), 1e-12]),
+                   modulus, float(min(case.spacing)), pin, float(material.moduli()[1]))
 
     @property
     def perturbation(self):
@@ -108,6 +113,17 @@ class Scales:
     def volume(self):
         """Residual scale of continuity [volume per unit thickness]."""
         return self.stress * self.h**2 / self.modulus
+
+
+def _footing_stresses(case, modulus):
+    """Stress scales of the footings [kPa]: ``force / (to - from)`` under load control,
+    ``modulus x rate x time.end / height`` (the oedometric stress of the final
+    settlement over the depth) under velocity control."""
+    for _, seg in case.boundary.segments():
+        if seg.load_controlled:
+            yield abs(seg.force) / (seg.end - seg.start)
+        elif seg.footing:
+            yield modulus * abs(seg.settlement_rate) * case.time.end / case.geometry.height
 
 
 @contextmanager
@@ -270,7 +286,7 @@ def material_update(material, stress, state, H, timings, where="an integration p
 
 
 def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, probes=(),
-                uniqueness=None):
+                uniqueness=None, segments=()):
     """One row of a coupled run's history.
 
     Parameters
@@ -291,6 +307,12 @@ def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, 
         Probe name and its pore pressure [kPa].
     uniqueness : float, optional
         The :mod:`soil.bifurcation` indicator of the level, if asked for.
+    segments : iterable of (Segment, ndarray, ndarray, float, float or None)
+        Per named segment (:meth:`soil.case.Boundary.segments` order): the segment, the
+        current and initial positions (K, 2) [m] of its boundary nodes, the vertical
+        force the boundary exerts on the soil over it (reaction, per unit thickness, y
+        up positive [kN/m]) and the plate unknown (uy [m]) of a load-controlled footing,
+        else None.
 
     Returns
     -------
@@ -298,16 +320,57 @@ def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, 
         ``time``, ``eps_a`` (:func:`axial_strain`), ``p`` and ``q`` (domain averages of
         p', q [kPa]), ``err`` (:func:`stretching_error`), ``gamma`` (mean horizontal
         displacement of the top over the height), ``dt``, ``iterations``, ``substeps``,
-        ``residual``, ``p_w@NAME`` per probe and, if given, ``uniqueness``.
+        ``residual``, ``p_w@NAME`` per probe, if given, ``uniqueness`` and per segment
+        ``settlement@NAME`` and ``pressure@NAME`` (:func:`segment_columns`).
     """
     p, q = invariants(stress)
+    contact = {}
+    for seg, nodes, nodes0, reaction, plate in segments:
+        contact.update(segment_columns(seg, t, nodes, nodes0, reaction, plate))
     return {"time": t, "eps_a": axial_strain(case, top[:, 1]),
             "p": np.average(p, weights=weights), "q": np.average(q, weights=weights),
             "err": stretching_error(case, stretching[:, 1], weights),
             "gamma": np.mean(top[:, 0] - top0[:, 0]) / case.geometry.height,
             "dt": dt, "iterations": info["iterations"], "substeps": info["substeps"],
             "residual": info["residual"], **{f"p_w@{name}": v for name, v in probes},
-            **({} if uniqueness is None else {"uniqueness": uniqueness})}
+            **({} if uniqueness is None else {"uniqueness": uniqueness}), **contact}
+
+
+def segment_columns(segment, t, nodes, nodes0, reaction, plate=None):
+    """``settlement@NAME`` [m, positive down] and ``pressure@NAME`` [kPa, compression
+    positive] of one named segment at time t [s].
+
+    The settlement is the footing's: ``settlement_rate x t`` under velocity control,
+    ``-plate`` under load control; for a segment that is no footing, the mean downward
+    displacement of its nodes. The pressure is the mean contact pressure, ``-reaction /
+    width``, the current width being ``(to - from)`` times the stretch of the segment's
+    nodes (the current over the initial distance between its two end nodes; 1 with
+    fewer than two nodes).
+
+    Examples
+    --------
+    >>> from soil.case import Segment
+    >>> seg = Segment("f", 0.0, 1.0, uy="footing", settlement_rate=1e-3)
+    >>> nodes0 = np.array([[0.0, 1.0], [1.0, 1.0]])
+    >>> cols = segment_columns(seg, 2.0, nodes0 + [[0.0, -2e-3], [0.1, -2e-3]], nodes0, -5.5)
+    >>> round(cols["settlement@f"], 12), round(cols["pressure@f"], 12)
+    (0.002, 5.0)
+    """
+    nodes, nodes0 = np.asarray(nodes).reshape(-1, 2), np.asarray(nodes0).reshape(-1, 2)
+    if segment.load_controlled:
+        settlement = -plate
+    elif segment.footing:
+        settlement = segment.settlement_rate * t
+    else:
+        settlement = -float(np.mean(nodes[:, 1] - nodes0[:, 1])) if len(nodes) else 0.0
+    stretch = 1.0
+    if len(nodes0) > 1:
+        order = np.argsort(nodes0[:, np.argmax(np.ptp(nodes0, axis=0))])
+        ends, ends0 = nodes[order[[0, -1]]], nodes0[order[[0, -1]]]
+        stretch = np.linalg.norm(ends[1] - ends[0]) / np.linalg.norm(ends0[1] - ends0[0])
+    width = (segment.end - segment.start) * stretch
+    return {f"settlement@{segment.name}": float(settlement),
+            f"pressure@{segment.name}": float(-reaction / width)}
 
 
 def march(case, current, step, row, snapshot, stats, progress=True, desc=""):

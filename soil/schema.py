@@ -54,6 +54,19 @@ Schema (every case has the same one; unknown keys are an error)::
     traction = [0.0, 0.0]             # total traction [kPa] x load factor (default zero)
     water = "impermeable"             # or "drained" (p_w = 0); drained wins at a corner
 
+    [boundary.top.footing]            # optional named segments of an edge (any name of
+    from = 0.0                        # letters, digits, _, -): m along the edge in the
+    to = 1.0                          # initial configuration (x on top and bottom, y on
+                                      # left and right), 0 <= from < to <= edge length;
+                                      # disjoint segments; no traction of their own
+    ux = "fixed"                      # "free" (default), "fixed" or "prescribed"
+    uy = "footing"                    # the same, or "footing" (top or bottom edge only)
+    settlement_rate = 0.01            # footing: m/s, positive down (velocity control), or
+    # force = 50.0                    # kN/m, compression positive, x load factor (load
+                                      # control; at most one per case, none with a
+                                      # rigid edge); exactly one of the two
+    # water = "drained"               # default: the edge's water condition
+
     [loading]                         # optional
     velocity_gradient = [[0.0, 0.0], [0.0, -0.01]]   # L [1/s], constant (default zero)
     load = 1.0                        # a factor from t = 0+ (step load, the default) or
@@ -106,7 +119,24 @@ Boundary kinds of a displacement component:
   uniform vertical displacement (a frictionless rigid plate, Mandel's problem) whose total
   force is ``traction[1] x load factor x (initial edge length)`` per unit thickness.
 
-At a corner both edges' conditions apply; two different non-free kinds on the same
+* ``footing`` (``uy`` of a named segment of the top or bottom edge): a rigid strip
+  footing, the segment's uy moving as one body; ``settlement_rate`` imposes uy =
+  -rate x t on it, ``force`` lets it settle by one unknown whose total force is
+  ``-force x load factor`` (the ``rigid`` plate's machinery). With ``ux = "fixed"`` it
+  is rough (no sideways motion), with ``ux = "free"`` smooth. Coupled analyses only.
+
+A named segment overrides its edge's kinds (and, if given, its water condition) where
+the initial coordinate along the edge lies in ``[from, to]`` (within 1e-9 of the
+smallest spacing): at the EFG boundary Gauss points and the FEM DOFs there; the rest of
+the edge keeps the edge's conditions, its traction included. Each segment adds the
+history columns ``settlement@NAME`` (m, positive down: the footing's settlement, or the
+mean downward displacement of a segment that is no footing) and ``pressure@NAME``
+(kPa, compression positive: the vertical force the boundary exerts on the soil there, in
+excess of the initial state, over the current width; see
+:func:`soil.coupling.segment_columns`).
+
+At a corner both edges' conditions apply (a segment that reaches the corner counts
+there); two different non-free kinds on the same
 component of a corner are an error. Tractions are loads in excess of the initial state,
 which is taken as in equilibrium.
 
@@ -165,12 +195,14 @@ KEYS = {
     "diagnostics": ("uniqueness",),
     "initial": ("pore_pressure",),
     "edge": ("ux", "uy", "displacement", "traction", "water"),
+    "segment": ("from", "to", "ux", "uy", "water", "settlement_rate", "force"),
     "loading": ("velocity_gradient", "load"),
     "time": ("end", "steps", "dt0", "growth", "dt_max"),
     "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "cells", "order", "penalty",
             "correction", "stabilisation", "stabilisation_factor"),
 }
-"""The keys each section accepts (``edge``: each ``[boundary.<side>]``). ``[material]``,
+"""The keys each section accepts (``edge``: each ``[boundary.<side>]``, which also takes
+named segments as sub-tables; ``segment``: each ``[boundary.<side>.<name>]``). ``[material]``,
 ``[probes]`` and ``[exact]`` take the keys of the material, the probe names and the
 solution's parameters."""
 GEOMETRIC = ("dt0", "growth", "dt_max")

@@ -8,13 +8,14 @@ an :class:`~soil.errors.InputError` of one line naming the key and the fix.
 
 import math
 import re
+from dataclasses import replace
 
 import numpy as np
 
 from soil.analytical import exact_solution
-from soil.case import (ANALYSES, EDGES, KINDS, LAYOUTS, MAX_STEPS, WATER, Boundary, Case,
-                       Diagnostics, Discretisation, Edge, Fluid, Geometry, Initial, Loading,
-                       Probe, TimeStepping)
+from soil.case import (ANALYSES, EDGES, KINDS, LAYOUTS, MAX_STEPS, SEGMENT_KINDS, WATER,
+                       Boundary, Case, Diagnostics, Discretisation, Edge, Fluid, Geometry,
+                       Initial, Loading, Probe, Segment, TimeStepping)
 from soil.errors import InputError, require
 from soil.materials import FLUID_KEYS, material_from_spec
 from soil.schema import (ASPECTS, GEOMETRIC, KEYS, LENGTHS, MAX_TRIANGLE_ORDER, SCALES,
@@ -60,7 +61,7 @@ def case_from_dict(data):
         discretisation=_discretisation(_section(data, "discretisation")),
         material_spec=material_spec, fluid=fluid,
         initial=_initial(_section(data, "initial", {})),
-        boundary=_boundary(_section(data, "boundary"), loading),
+        boundary=_boundary(_section(data, "boundary"), loading, geometry),
         loading=loading,
         time=_time(_section(data, "time")),
         probes=probes,
@@ -70,6 +71,7 @@ def case_from_dict(data):
     )
     _require_aspect(case)
     _require_exact_if_used(case)
+    _require_coupled_footings(case)
     case.times()
     return case
 
@@ -199,33 +201,48 @@ def _initial(table):
     return Initial(_number(table, "pore_pressure", "initial", 0.0))
 
 
-def _boundary(table, loading):
+def _boundary(table, loading, geometry):
     _check_keys(table, EDGES, "boundary", "edge")
     for side in EDGES:
         require(side in table, f"boundary: edge {side!r} is missing: add [boundary.{side}] "
                 "(every edge of the rectangle exactly once)")
-    boundary = Boundary(**{side: _edge(_section(table, side), side, loading)
+    length = {"left": geometry.height, "right": geometry.height,
+              "bottom": geometry.width, "top": geometry.width}
+    boundary = Boundary(**{side: _edge(_section(table, side), side, loading, length[side])
                            for side in EDGES})
+    corner = {("left", "bottom"): (0.0, 0.0), ("left", "top"): (geometry.height, 0.0),
+              ("right", "bottom"): (0.0, geometry.width),
+              ("right", "top"): (geometry.height, geometry.width)}
     for a, b in _CORNERS:
-        for comp in ("ux", "uy"):
-            kinds = {getattr(getattr(boundary, a), comp), getattr(getattr(boundary, b), comp)}
+        (ka,), _, _ = getattr(boundary, a).at([corner[a, b][0]])
+        (kb,), _, _ = getattr(boundary, b).at([corner[a, b][1]])
+        for f, comp in enumerate(("ux", "uy")):
+            kinds = {str(ka[f]), str(kb[f])}
             require(len(kinds - {"free"}) <= 1, f"boundary.{a}.{comp} and boundary.{b}."
-                    f"{comp} conflict at their corner ({' vs '.join(sorted(kinds))}): "
-                    "make them agree or set one free")
-    _require_supports(boundary)
+                    f"{comp} conflict at their corner ({' vs '.join(sorted(kinds))}; a "
+                    "segment reaching the corner counts there): make them agree or set "
+                    "one free")
+    plates = [f"boundary.{side}" for side, edge in boundary.items() if edge.uy == "rigid"]
+    plates += [f"boundary.{side}.{seg.name}" for side, seg in boundary.segments()
+               if seg.load_controlled]
+    require(len(plates) <= 1, f"{' and '.join(plates)}: at most one rigid plate or "
+            "load-controlled footing (force) per case: give the others a settlement_rate")
+    _require_supports(boundary, length)
     return boundary
 
 
-def _require_supports(boundary):
+def _require_supports(boundary, length):
     """Refuse a body free to move rigidly: x and y translation and rotation must be stopped.
 
-    ``fixed``, ``prescribed`` and ``exact`` restrain a component; a ``rigid`` plate is
-    load-controlled and lets its edge settle. It would stop rotation, but never decides:
-    the uy that stops y translation is on a horizontal edge (stopping rotation too) or
-    on a vertical one, which may not meet the plate's edge with another kind.
+    ``fixed``, ``prescribed`` and ``exact`` restrain a component, and so does a
+    velocity-controlled footing (:class:`~soil.case.Segment`) its uy; a ``rigid`` plate
+    (or a load-controlled footing) lets its edge settle. It would stop rotation, but never
+    decides: the uy that stops y translation is on a horizontal edge (stopping rotation
+    too) or on a vertical one, which may not meet the plate's edge with another kind.
     """
-    ux = {side for side, edge in boundary.items() if edge.ux in _RESTRAINED}
-    uy = {side for side, edge in boundary.items() if edge.uy in _RESTRAINED}
+    kinds = {side: edge.kinds(length[side]) for side, edge in boundary.items()}
+    ux = {side for side, (kx, _) in kinds.items() if kx & set(_RESTRAINED)}
+    uy = {side for side, (_, ky) in kinds.items() if ky & {*_RESTRAINED, "footing"}}
     kinds = '"fixed", "prescribed" or "exact"'
     require(ux, "boundary: the body is not supported along x (no edge restrains ux): set "
             f"an edge's ux to {kinds}, e.g. boundary.left.ux = \"fixed\"")
@@ -239,10 +256,13 @@ def _require_supports(boundary):
             "\"fixed\")")
 
 
-def _edge(table, side, loading):
+def _edge(table, side, loading, length):
     where = f"boundary.{side}"
-    _check_keys(table, KEYS["edge"], where)
-    table = dict(table)
+    segments = {k: v for k, v in table.items() if isinstance(v, dict)}
+    table = {k: v for k, v in table.items() if k not in segments}
+    for key in table:
+        require(key in KEYS["edge"], f"{where}: unknown key {key!r}: allowed are "
+                f"{', '.join(KEYS['edge'])}, or a named segment [{where}.NAME]")
     if "displacement" in table:
         require("ux" not in table and "uy" not in table,
                 f"{where}: give either displacement or ux/uy, not both")
@@ -261,7 +281,57 @@ def _edge(table, side, loading):
         require(edge.traction == "exact" or t == 0 or kind in ("free", "rigid"),
                 f"{where}.traction acts on {comp}, "
                 f"which is {kind!r}: set that traction component to 0 or {comp} free")
-    return edge
+    parsed = tuple(_segment(spec, name, side, loading, length)
+                   for name, spec in segments.items())
+    spans = sorted((seg.start, seg.end, seg.name) for seg in parsed)
+    for (_, end, a), (start, _, b) in zip(spans, spans[1:]):
+        require(start > end, f"{where}.{a} and {where}.{b} overlap ({where}.{b}.from = "
+                f"{start:g} <= {where}.{a}.to = {end:g}): make the segments disjoint")
+    return replace(edge, segments=parsed)
+
+
+def _segment(table, name, side, loading, length):
+    """A named segment ``[boundary.<side>.<name>]`` (:class:`soil.case.Segment`)."""
+    where = f"boundary.{side}.{name}"
+    require(re.fullmatch(r"[A-Za-z0-9_-]+", name) and name not in KEYS["edge"],
+            f"{where}: use letters, digits, _ and - in segment names (they become column "
+            f"names), other than the edge's keys {', '.join(KEYS['edge'])}")
+    _check_keys(table, KEYS["segment"], where)
+    start, end = _number(table, "from", where), _number(table, "to", where)
+    along = "x" if side in ("top", "bottom") else "y"
+    require(0 <= start < end <= length, f"{where}: from = {start:g} and to = {end:g} must "
+            f"satisfy 0 <= from < to <= {length:g} (m along {along}, the edge's length): "
+            "put the segment on the edge")
+    seg = Segment(name=name, start=start, end=end,
+                  ux=_string(table, "ux", where, "free", SEGMENT_KINDS["ux"]),
+                  uy=_string(table, "uy", where, "free", SEGMENT_KINDS["uy"]),
+                  water=_string(table, "water", where, None, WATER) if "water" in table
+                  else None,
+                  settlement_rate=(_number(table, "settlement_rate", where)
+                                   if "settlement_rate" in table else None),
+                  force=_number(table, "force", where) if "force" in table else None)
+    given = [key for key in ("settlement_rate", "force") if key in table]
+    if seg.footing:
+        require(side in ("top", "bottom"), f"{where}.uy = 'footing' applies to the top "
+                "or bottom edge only: move the segment there")
+        require(len(given) == 1, f"{where}.uy = 'footing' needs exactly one of "
+                f"settlement_rate (m/s, velocity control) or force (kN/m, load control), "
+                f"not {' and '.join(given) or 'neither'}: keep one")
+    else:
+        require(not given, f"{where}.{given[0] if given else ''} applies to a footing "
+                "only: set uy = \"footing\" or remove it")
+    for comp in ("ux", "uy"):
+        require(getattr(seg, comp) != "prescribed" or np.any(loading.L),
+                f"{where}.{comp} = 'prescribed' needs a non-zero "
+                "loading.velocity_gradient: set it, or use 'fixed'")
+    return seg
+
+
+def _require_coupled_footings(case):
+    footings = [f"boundary.{side}.{seg.name}" for side, seg in case.boundary.segments()
+                if seg.footing]
+    require(not footings or case.analysis == "coupled", f"{footings[0] if footings else ''}"
+            ": a footing needs analysis = \"coupled\" (the static solver has none)")
 
 
 def _traction(value, where):

@@ -46,6 +46,18 @@ def test_round_trip_pickle_and_json(name):
     assert case_from_dict(json.loads(json.dumps(case.to_dict()))) == case
 
 
+def test_round_trip_of_named_segments():
+    case = load_case("unconfined-compression", [
+        "boundary.top.uy=free", "boundary.top.footing.from=0", "boundary.top.footing.to=1.5",
+        "boundary.top.footing.uy=footing", "boundary.top.footing.ux=fixed",
+        "boundary.top.footing.settlement_rate=0.01", "boundary.right.pad.from=1",
+        "boundary.right.pad.to=2", "boundary.right.pad.water=drained"])
+    assert [(side, seg.name) for side, seg in case.boundary.segments()] == [
+        ("right", "pad"), ("top", "footing")]
+    assert pickle.loads(pickle.dumps(case)) == case
+    assert case_from_dict(json.loads(json.dumps(case.to_dict()))) == case
+
+
 def test_unconfined_compression_has_111_nodes():
     case = BUILTIN["unconfined-compression"]
     nodes = case.nodes()

@@ -1,0 +1,216 @@
+"""Named edge segments and the rigid strip footing (issue 15, item 1), in both solvers.
+
+An elastic oedometer (a footing over the whole top of a laterally confined, drained
+layer) checks the sign and size of ``pressure@NAME`` by hand: ``M x settlement /
+height``, M the constrained modulus; a footing on half the top checks that the rest of
+the edge stays traction free (the base's reaction balances the footing's); bad segments
+are refused with one line; and a small undrained Cam-clay footing runs to 0.2 B.
+"""
+
+import copy
+import json
+
+import numpy as np
+import pytest
+
+from efg.solver import solve as efg_solve
+from fem_reference.solver import solve as fem_solve
+from soil.errors import InputError
+from soil.problems import load_case
+from soil.validation import case_from_dict
+
+METHODS = ("efg", "fem-th", "fem-p1p1")
+
+
+def _solve(case, method):
+    if method == "efg":
+        return efg_solve(case, progress=False)
+    return fem_solve(case, method, progress=False)
+
+
+def _layer(footing, width=1.0, height=2.0, nx=3, ny=5, bottom=None, end=100.0):
+    """A linear elastic, drained layer (k large: effective = total stress at the slow
+    rate), sides ux fixed, base fixed, the given segment(s) on the top."""
+    return {
+        "name": "layer", "analysis": "coupled",
+        "geometry": {"width": width, "height": height},
+        "discretisation": {"nx": nx, "ny": ny},
+        "material": {"model": "elastic", "E": 1000.0, "nu": 0.3, "permeability": 10.0,
+                     "gamma_w": 1.0},
+        "boundary": {"left": {"ux": "fixed"}, "right": {"ux": "fixed"},
+                     "bottom": bottom or {"ux": "fixed", "uy": "fixed"},
+                     "top": {"water": "drained", "footing": footing}},
+        "time": {"end": end, "steps": 2}}
+
+
+HEIGHT, END = 2.0, 100.0
+SETTLEMENT = 1e-4 * HEIGHT  # small: the finite-strain difference is ~ strain / 2 = 5e-5
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_oedometer_velocity_control_pressure_is_constrained_modulus_times_strain(method):
+    """Smooth footing over the whole top, pushed down by 1e-4 of the height: contact
+    pressure (compression positive) = M s / H within 0.1 % (measured 5.1e-5 in all
+    three methods; the finite-strain difference is about strain / 2 = 5e-5)."""
+    case = case_from_dict(_layer({"from": 0.0, "to": 1.0, "ux": "free", "uy": "footing",
+                                  "settlement_rate": SETTLEMENT / END}))
+    h = _solve(case, method).history
+    M = case.material().constrained_modulus()
+    assert h["settlement@footing"].iloc[-1] == pytest.approx(SETTLEMENT, rel=1e-12)
+    expected = M * h["settlement@footing"] / HEIGHT
+    assert np.allclose(h["pressure@footing"], expected, rtol=1e-3)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_oedometer_load_control_settlement_is_force_over_width_height_over_modulus(method):
+    """The same layer under a footing force of 0.2 kN/m on 1 m: the pressure is 0.2 kPa
+    and the settlement 0.2 H / M within 0.1 % (measured 3.7e-4 at five times this
+    force, finite strain)."""
+    force = 0.2
+    case = case_from_dict(_layer({"from": 0.0, "to": 1.0, "ux": "free", "uy": "footing",
+                                  "force": force}))
+    h = _solve(case, method).history
+    M = case.material().constrained_modulus()
+    assert h["pressure@footing"].iloc[-1] == pytest.approx(force / 1.0, rel=1e-6)
+    assert h["settlement@footing"].iloc[-1] == pytest.approx(force * HEIGHT / M, rel=1e-3)
+
+
+@pytest.mark.parametrize("method", ("efg", "fem-th"))
+def test_half_footing_leaves_the_rest_of_the_top_traction_free(method):
+    """A rough footing on half the top of a 2 x 1 layer; the base is a named segment too.
+
+    The sides are frictionless (ux fixed, uy free), so with the rest of the top traction
+    free the base's vertical reaction balances the footing's: pressure x width agree
+    (within 0.5 %, penalty and tolerance). The footing's settlement is rate x t exactly,
+    its nodes move with it (EFG: within 2 %), and the free half of the top does not.
+    """
+    rate = 1e-4 / END
+    case = case_from_dict(_layer(
+        {"from": 0.0, "to": 1.0, "ux": "fixed", "uy": "footing", "settlement_rate": rate},
+        width=2.0, height=1.0, nx=9, ny=5,
+        bottom={"base": {"from": 0.0, "to": 2.0, "ux": "fixed", "uy": "fixed"}}))
+    result = _solve(case, method)
+    h = result.history
+    assert np.array_equal(h["settlement@footing"], rate * h["time"])
+    footing_force = h["pressure@footing"] * 1.0
+    base_force = -h["pressure@base"] * 2.0  # the base pulls up where the footing pushes
+    assert (footing_force > 0).all()
+    assert np.allclose(base_force, footing_force, rtol=5e-3)
+    nodes = case.nodes()
+    top = nodes[:, 1] == 1.0
+    u = result.snapshots[-1].point_data["u"][: len(nodes)]
+    under, rest = top & (nodes[:, 0] <= 1.0), top & (nodes[:, 0] > 1.0)
+    # FEM imposes the nodes exactly; EFG's penalty acts at boundary Gauss points and
+    # its MLS field does not interpolate: measured 1.3 % off at the footing's edge node
+    assert np.allclose(u[under, 1], -rate * END, rtol=2e-2 if method == "efg" else 1e-9)
+    assert np.all(np.abs(u[rest, 1]) < 0.9 * rate * END)  # it would be the footing's
+    # motion, were the rest of the edge tied to the footing
+
+
+def _small_footing():
+    """Half a footing B = 2 m (from 0 to 1, symmetry at x = 0) on a 5 x 5 m undrained
+    Table 1 Cam-clay layer, smooth, pushed at 0.02 m/s to 0.2 B = 0.4 m in 20 steps;
+    grid 11 x 11 (spacing 0.5 m)."""
+    return case_from_dict({
+        "name": "small-footing", "analysis": "coupled",
+        "geometry": {"width": 5.0, "height": 5.0},
+        "discretisation": {"nx": 11, "ny": 11},
+        "material": {"preset": "table1", "model": "original", "permeability": 0.0},
+        "boundary": {"left": {"ux": "fixed"}, "right": {"ux": "fixed"},
+                     "bottom": {"ux": "fixed", "uy": "fixed"},
+                     "top": {"footing": {"from": 0.0, "to": 1.0, "ux": "free",
+                                         "uy": "footing", "settlement_rate": 0.02}}},
+        "time": {"end": 20.0, "steps": 20}})
+
+
+@pytest.mark.parametrize("method", ("efg", "fem-th"))
+def test_small_undrained_footing_runs_to_a_fifth_of_its_width(method):
+    """Measured (2 cores, two runs at once): EFG 10.0 s, 149 Newton iterations, no
+    cut-back, 10.54 kPa at 0.4 m; fem-th 11.7 s, 132 iterations, 2 cut-backs, 9.43 kPa.
+    (2 + pi) s_u = 6.69 kPa for this clay: the coarse grid is far from converged (the
+    study is issue 15's item 3)."""
+    result = _solve(_small_footing(), method)
+    h = result.history
+    assert h["settlement@footing"].iloc[-1] == pytest.approx(0.4, rel=1e-12)
+    pressure = h["pressure@footing"].to_numpy()
+    assert pressure[0] > 0 and np.all(np.diff(pressure[:10]) > 0)
+    assert result.summary["timings"]["total_s"] < 60
+
+
+GOOD = _layer({"from": 0.0, "to": 0.5, "ux": "fixed", "uy": "footing",
+               "settlement_rate": 1e-6})
+
+
+def _bad(path, value):
+    data = copy.deepcopy(GOOD)
+    table = data["boundary"]
+    *parents, last = path
+    for part in parents:
+        table = table[part]
+    if value is None:
+        del table[last]
+    else:
+        table[last] = value
+    return data
+
+
+@pytest.mark.parametrize("path, value, words", [
+    (("top", "footing", "width"), 1.0, ["boundary.top.footing", "unknown key 'width'"]),
+    (("top", "footing", "from"), 0.5, ["boundary.top.footing", "from = 0.5", "to = 0.5"]),
+    (("top", "footing", "to"), 1.5, ["boundary.top.footing", "to = 1.5", "<= 1"]),
+    (("top", "footing", "from"), -0.1, ["boundary.top.footing", "from = -0.1"]),
+    (("top", "pad"), {"from": 0.4, "to": 0.8, "uy": "fixed"},
+     ["boundary.top.footing and boundary.top.pad overlap"]),
+    (("top", "footing", "force"), 1.0, ["boundary.top.footing.uy = 'footing'",
+                                        "settlement_rate and force"]),
+    (("top", "footing", "settlement_rate"), None, ["boundary.top.footing.uy = 'footing'",
+                                                   "neither"]),
+    (("top", "footing", "uy"), "fixed", ["boundary.top.footing.settlement_rate",
+                                         "footing only"]),
+    (("top", "footing", "uy"), "rigid", ["boundary.top.footing.uy", "'rigid'"]),
+    (("left", "side"), {"from": 0.0, "to": 1.0, "uy": "footing", "force": 1.0},
+     ["boundary.left.side.uy = 'footing'", "top or bottom"]),
+    (("top", "footing", "water"), "wet", ["boundary.top.footing.water"]),
+])
+def test_bad_segments_are_refused_naming_the_key(path, value, words):
+    with pytest.raises(InputError) as err:
+        case_from_dict(_bad(path, value))
+    message = str(err.value)
+    assert "\n" not in message
+    for word in words:
+        assert word in message
+
+
+def test_segment_at_a_corner_counts_in_the_corner_check():
+    """A footing reaching the top-left corner meets a fixed left uy: a conflict."""
+    data = _bad(("left", "uy"), "fixed")
+    with pytest.raises(InputError, match="boundary.left.uy and boundary.top.uy conflict"):
+        case_from_dict(data)
+
+
+def test_two_load_controlled_footings_are_refused():
+    data = _bad(("top", "footing", "settlement_rate"), None)
+    data["boundary"]["top"]["footing"]["force"] = 1.0
+    data["boundary"]["top"]["other"] = {"from": 0.6, "to": 1.0, "uy": "footing",
+                                        "force": 1.0}
+    with pytest.raises(InputError, match="at most one rigid plate or load-controlled"):
+        case_from_dict(data)
+
+
+def test_segments_round_trip_and_override():
+    case = case_from_dict(GOOD)
+    assert case_from_dict(json.loads(json.dumps(case.to_dict()))) == case
+    (side, seg), = case.boundary.segments()
+    assert (side, seg.name, seg.start, seg.end, seg.uy) == ("top", "footing", 0.0, 0.5,
+                                                            "footing")
+    moved = load_case("terzaghi", ["boundary.top.traction=[0, 0]",
+                                   "boundary.top.pad.from=0.5", "boundary.top.pad.to=1.0",
+                                   "boundary.top.pad.uy=footing",
+                                   "boundary.top.pad.force=2.0",
+                                   "boundary.top.pad.water=impermeable"])
+    (_, pad), = moved.boundary.segments()
+    assert (pad.start, pad.end, pad.force, pad.water) == (0.5, 1.0, 2.0, "impermeable")
+    assert moved.plate_force(1.0) == -2.0
+    kind, drained, index = moved.boundary.top.at([0.0, 0.5, 1.0, 2.0])
+    assert kind[:, 1].tolist() == ["free", "rigid", "rigid", "free"]
+    assert drained.tolist() == [True, False, False, True] and index.tolist() == [-1, 0, 0, -1]
