@@ -241,7 +241,7 @@ def stabilisation_factors(kinds=("perturbation", "projection"), factors=(1, 2, 4
 TARGET = 0.02
 
 
-def target_infsup(factors, target=TARGET, sizes=(17, 33, 65)):
+def target_infsup(factors, target=TARGET, sizes=(9, 17, 33, 65)):
     """The inf-sup test with v = 0 one refinement further (n = 65), for the smallest
     factor of each stabilisation that meets ``target`` in :func:`stabilisation_factors`
     (``factors``): whether its beta, still falling at n = 33, levels off.
