@@ -126,7 +126,8 @@ def _small_footing():
 @pytest.mark.parametrize("method", ("efg", "fem-th"))
 def test_small_undrained_footing_runs_to_a_fifth_of_its_width(method):
     """Measured (2 cores, two runs at once): EFG 10.0 s, 149 Newton iterations, no
-    cut-back, 10.54 kPa at 0.4 m; fem-th 11.7 s, 132 iterations, 2 cut-backs, 9.43 kPa.
+    cut-back, 10.54 kPa at 0.4 m; fem-th 11.7 s, 132 iterations, 2 cut-backs, 9.43 kPa
+    (run time is not asserted: speed belongs to ``make bench``).
     (2 + pi) s_u = 6.69 kPa for this clay: the coarse grid is far from converged (the
     study is issue 15's item 3)."""
     result = _solve(_small_footing(), method)
@@ -134,7 +135,6 @@ def test_small_undrained_footing_runs_to_a_fifth_of_its_width(method):
     assert h["settlement@footing"].iloc[-1] == pytest.approx(0.4, rel=1e-12)
     pressure = h["pressure@footing"].to_numpy()
     assert pressure[0] > 0 and np.all(np.diff(pressure[:10]) > 0)
-    assert result.summary["timings"]["total_s"] < 60
 
 
 GOOD = _layer({"from": 0.0, "to": 0.5, "ux": "fixed", "uy": "footing",
