@@ -260,8 +260,9 @@ def json_line(summary):
     """A short one-line digest of a run summary for the terminal."""
     errors = summary.get("errors", {})
     text = ", ".join(f"{k} error {v:.3g}" for k, v in errors.items())
+    stopped = summary.get("stopped")
     return f"{summary.get('steps')} step(s), {summary.get('dofs')} dofs" + (
-        f", {text}" if text else "")
+        f", {text}" if text else "") + (f"; stopped early {stopped}" if stopped else "")
 
 
 def _path(args):

@@ -187,3 +187,34 @@ def mandel_roots(ratio, terms):
     eps = 1e-12
     return np.array([brentq(f, k * np.pi + eps, k * np.pi + np.pi / 2 - eps)
                      if k else brentq(f, eps * 1e3, np.pi / 2 - eps) for k in range(terms)])
+
+
+def undrained_strength(clay):
+    """Undrained strength ``s_u = M p'_f / sqrt(3)`` of a Cam-clay in plane strain [kPa].
+
+    At constant volume the critical state is reached at ``p'_f = p'0 (OCR / r)^Lambda``
+    whatever the path, ``r = e`` for the original model and 2 for the modified one
+    (``Lambda = (lambda - kappa) / lambda``; normally consolidated: ``p'0 exp(-Lambda)``
+    and ``p'0 2^-Lambda``). In plane strain at critical state the out-of-plane stress is
+    the in-plane mean, so the largest in-plane shear stress is ``q / sqrt(3)``.
+
+    Parameters
+    ----------
+    clay : soil.camclay.CamClay
+
+    Examples
+    --------
+    The paper's Table 1 clay (original model, normally consolidated, p'0 = 3 kPa):
+
+    >>> from soil.camclay import CamClay
+    >>> clay = CamClay(lam=0.11, kappa=0.04, M=1.42, nu=0.333, e0=0.83, p0=3.0)
+    >>> round(float(undrained_strength(clay)), 4)
+    1.3016
+    """
+    r = np.e if clay.model == "original" else 2.0
+    return clay.M * clay.p0 * (clay.ocr / r) ** clay.Lambda / np.sqrt(3)
+
+
+#: Prandtl's bearing capacity factor of a weightless Tresca soil: the limit pressure
+#: under a rigid strip footing, rough or smooth, is ``PRANDTL x s_u``.
+PRANDTL = 2 + np.pi

@@ -184,8 +184,9 @@ class CamClay(Material):
         dstrain = np.asarray(dstrain, dtype=float)
         p_n, _ = invariants(stress)
         pc_n, v_n = state["pc"], state["v"]
-        require(np.all(p_n > 0), "Cam-clay needs p' > 0 at every point: start from a "
-                "compressive effective stress (material.p0 > 0)")
+        if not np.all(p_n > 0):
+            raise ConvergenceError(f"Cam-clay needs p' > 0 at every point; a point "
+                                   f"starts the step at p' = {p_n.min():.3g}")
 
         dev = dstrain[:, :3].sum(axis=1)
         vbar, dvbar = _mean_volume(v_n, dev)

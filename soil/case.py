@@ -31,6 +31,7 @@ ANALYSES = ("coupled", "static")
 SEGMENT_TOLERANCE = 1e-9
 """A point within this fraction of the smallest grid spacing of a segment's end belongs to
 the segment (:meth:`Case.edge_conditions`)."""
+ON_FAILURE = ("error", "stop")
 MAX_STEPS = 100_000
 """Largest number of time steps of a case (``time.steps``, or geometric steps to the end)."""
 
@@ -266,13 +267,16 @@ class Loading:
 
 @dataclass(frozen=True)
 class TimeStepping:
-    """End time [s] and either ``steps`` or geometric ``dt0``, ``growth``, ``dt_max``."""
+    """End time [s] and either ``steps`` or geometric ``dt0``, ``growth``, ``dt_max``;
+    ``on_failure`` is what a step that fails after every halving does: ``error`` (no
+    result) or ``stop`` (the result ends at the last converged level)."""
 
     end: float
     steps: int | None = None
     dt0: float | None = None
     growth: float | None = None
     dt_max: float | None = None
+    on_failure: str = "error"
 
     def levels(self):
         """Time levels ``t_0 = 0, ..., t_end`` [s].

@@ -389,7 +389,9 @@ def march(case, current, step, row, snapshot, stats, progress=True, desc=""):
     snapshot : callable
         ``snapshot(current, t) -> Snapshot``.
     stats : dict
-        Updated in place: ``newton_iterations``, ``cutbacks``, ``max_residual`` and, when
+        Updated in place: ``newton_iterations``, ``cutbacks``, ``max_residual``,
+        ``stopped`` (with ``time.on_failure = "stop"``: None, or where and why the run
+        ended before ``time.end``) and, when
         the rows carry the uniqueness indicator (``diagnostics.uniqueness``),
         ``uniqueness_onset_step``: the first step (from 1) whose indicator is not
         positive, None if there is none.
@@ -401,12 +403,19 @@ def march(case, current, step, row, snapshot, stats, progress=True, desc=""):
     snapshots : list of Snapshot
         At t = 0 and after every level.
     """
-    stats.update({"newton_iterations": 0, "cutbacks": 0, "max_residual": 0.0})
+    stats.update({"newton_iterations": 0, "cutbacks": 0, "max_residual": 0.0,
+                  "stopped": None})
     times = case.times()
     rows, snapshots = [], [snapshot(current, 0.0)]
     for t0, t1 in tqdm(list(zip(times[:-1], times[1:])), desc=desc, unit="step",
                        disable=not progress or None, leave=False):
-        current, info = _advance(current, step, t0, t1, stats)
+        try:
+            current, info = _advance(current, step, t0, t1, stats)
+        except ConvergenceError as err:
+            if case.time.on_failure != "stop" or not rows:
+                raise
+            stats["stopped"] = f"at t = {t0:g} s: {err}"
+            break
         rows.append(row(current, t1, t1 - t0, info))
         snapshots.append(snapshot(current, t1))
     history = pd.DataFrame(rows)

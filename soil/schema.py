@@ -75,6 +75,10 @@ Schema (every case has the same one; unknown keys are an error)::
     [time]
     end = 20.0                        # s
     steps = 100                       # equal steps, or instead: dt0, growth, dt_max
+    on_failure = "error"              # a step that fails after every halving ends the
+                                      # run with an error and no result; "stop": the
+                                      # result ends at the last converged level, and
+                                      # its summary says where and why it stopped
 
     [probes]                          # optional: name = [x, y] inside the domain;
     centre = [1.5, 2.0]               # history columns are named like "p_w@centre"
@@ -197,7 +201,7 @@ KEYS = {
     "edge": ("ux", "uy", "displacement", "traction", "water"),
     "segment": ("from", "to", "ux", "uy", "water", "settlement_rate", "force"),
     "loading": ("velocity_gradient", "load"),
-    "time": ("end", "steps", "dt0", "growth", "dt_max"),
+    "time": ("end", "steps", "dt0", "growth", "dt_max", "on_failure"),
     "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "cells", "order", "penalty",
             "correction", "stabilisation", "stabilisation_factor"),
 }

@@ -13,9 +13,10 @@ from dataclasses import replace
 import numpy as np
 
 from soil.analytical import exact_solution
-from soil.case import (ANALYSES, EDGES, KINDS, LAYOUTS, MAX_STEPS, SEGMENT_KINDS, WATER,
-                       Boundary, Case, Diagnostics, Discretisation, Edge, Fluid, Geometry,
-                       Initial, Loading, Probe, Segment, TimeStepping)
+from soil.case import (ANALYSES, EDGES, KINDS, LAYOUTS, MAX_STEPS, ON_FAILURE,
+                       SEGMENT_KINDS, WATER, Boundary, Case, Diagnostics, Discretisation,
+                       Edge, Fluid, Geometry, Initial, Loading, Probe, Segment,
+                       TimeStepping)
 from soil.errors import InputError, require
 from soil.materials import FLUID_KEYS, material_from_spec
 from soil.schema import (ASPECTS, GEOMETRIC, KEYS, LENGTHS, MAX_TRIANGLE_ORDER, SCALES,
@@ -426,19 +427,21 @@ def _time(table):
     _check_keys(table, KEYS["time"], "time")
     end = _number(table, "end", "time")
     require(end > 0, f"time.end = {end} must be positive (s)")
+    on_failure = _string(table, "on_failure", "time", "error", ON_FAILURE)
     if "steps" in table:
         require(not set(GEOMETRIC) & set(table), "time: give either steps or dt0, "
                 "growth, dt_max, not both")
         steps = _integer(table, "steps", "time")
         require(1 <= steps <= MAX_STEPS, f"time.steps = {steps} must lie in 1..{MAX_STEPS}")
-        return TimeStepping(end=end, steps=steps)
+        return TimeStepping(end=end, steps=steps, on_failure=on_failure)
     require(set(GEOMETRIC) <= set(table), "time: give steps (equal steps) or all of dt0, "
             "growth, dt_max (geometric steps)")
     dt0, growth, dt_max = (_number(table, key, "time") for key in GEOMETRIC)
     require(0 < dt0 <= dt_max, f"time.dt0 = {dt0} must be positive and at most "
             f"time.dt_max = {dt_max}")
     require(growth > 1, f"time.growth = {growth} must exceed 1 (t_(n+1) = growth t_n)")
-    return TimeStepping(end=end, dt0=dt0, growth=growth, dt_max=dt_max)
+    return TimeStepping(end=end, dt0=dt0, growth=growth, dt_max=dt_max,
+                        on_failure=on_failure)
 
 
 def _probes(table, geometry):

@@ -63,3 +63,19 @@ def test_every_named_test_runs_and_compression_is_positive():
 def test_unknown_test_is_refused():
     with pytest.raises(InputError, match="unknown driver test"):
         run_test(table1(), "triaxial-extension", 0.1)
+
+
+@pytest.mark.parametrize("model,ocr", [("original", 1.0), ("modified", 1.0), ("modified", 2.0)])
+def test_plane_strain_undrained_strength_is_the_closed_form(model, ocr):
+    """At 50 % strain the largest in-plane shear stress (sigma_1 - sigma_3)/2 of isochoric
+    plane strain is ``M p'_f / sqrt(3)`` (soil.analytical.undrained_strength): the
+    out-of-plane stress has become the in-plane mean."""
+    from soil.analytical import undrained_strength
+    from soil.driver import _integrated
+
+    clay = table1(model, ocr)
+    raw, _ = _integrated(clay, "undrained-plane-strain", 0.5, 200)
+    last = raw.iloc[-1]
+    tau = np.hypot((last.sxx - last.syy) / 2, last.sxy)
+    assert tau == pytest.approx(undrained_strength(clay), rel=1e-3)
+    assert last.szz == pytest.approx((last.sxx + last.syy) / 2, rel=1e-3)

@@ -214,3 +214,38 @@ def test_segments_round_trip_and_override():
     kind, drained, index = moved.boundary.top.at([0.0, 0.5, 1.0, 2.0])
     assert kind[:, 1].tolist() == ["free", "rigid", "rigid", "free"]
     assert drained.tolist() == [True, False, False, True] and index.tolist() == [-1, 0, 0, -1]
+
+
+def test_a_run_that_fails_can_stop_at_its_last_converged_level():
+    """``time.on_failure = "stop"``: the fem-th footing on a 6 x 6 grid, pushed to 0.02,
+    0.2, 2 and 4 m (levels 1, 10, 100, 200 s at 0.02 m/s) fails before 4 m (measured:
+    in the step to 2 m); the result keeps every level before the failure and says why.
+    With the default ``error`` the same run raises."""
+    from soil.errors import ConvergenceError
+
+    base = ["discretisation.nx=6", "discretisation.ny=6", "time.dt0=1", "time.growth=10",
+            "time.dt_max=100", "time.end=200", "boundary.top.footing.settlement_rate=0.02"]
+    with pytest.raises(ConvergenceError):
+        fem_solve(load_case("strip-footing", base), "fem-th", progress=False)
+    result = fem_solve(load_case("strip-footing", [*base, "time.on_failure=stop"]),
+                       "fem-th", progress=False)
+    stopped = result.summary["stopped"]
+    assert stopped.startswith("at t = ") and "halvings" in stopped
+    assert 0 < len(result.history) < 4
+    assert len(result.snapshots) == len(result.history) + 1
+    assert np.isfinite(result.history["pressure@footing"]).all()
+
+
+def test_taylor_hood_meets_prandtl_at_a_tenth_of_the_width():
+    """The built-in strip footing on 11 x 11 nodes: fem-th's mean contact pressure at a
+    settlement of 0.1 B is Prandtl's (2 + pi) s_u within 5 % (measured 1.012; 0.973 on
+    21 x 21 and 0.956 on 41 x 41 nodes, `make report`)."""
+    from comparisons.footing import width
+    from soil.analytical import PRANDTL, undrained_strength
+
+    case = load_case("strip-footing", ["discretisation.nx=11", "discretisation.ny=11",
+                                       "time.end=10", "time.steps=20"])
+    h = fem_solve(case, "fem-th", progress=False).history
+    B = width(case)
+    p = np.interp(0.1 * B, h["settlement@footing"], h["pressure@footing"])
+    assert p / (PRANDTL * undrained_strength(case.material())) == pytest.approx(1, abs=0.05)
