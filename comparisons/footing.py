@@ -24,8 +24,8 @@ CASE = "strip-footing"
 #: Methods of the study: the method and its overrides.
 METHODS = {"efg": ("efg", ()), "fem-th": ("fem-th", ()),
            "fem-p1p1-stab": ("fem-p1p1-stab", ())}
-#: Nodes per side of the 5 B x 5 B domain (spacing B/2, B/4, B/8).
-GRIDS = (11, 21, 41)
+#: Nodes per side of the 5 B x 5 B domain (spacing B/2, B/4, B/6).
+GRIDS = (11, 21, 31)
 #: A curve is "within" Prandtl's pressure from the first settlement where it is within
 #: this fraction of it.
 WITHIN = 0.05
