@@ -68,6 +68,8 @@ class Points:
     stretching: np.ndarray   # (N, 4) nodal stretching D^I of the last step [1/s]
     uniqueness: float = 0.0  # soil.bifurcation indicator of the last step (if asked for)
     reactions: np.ndarray = None  # (S,) vertical force on the soil per named segment
+    cells: object = None     # efg.quadrature.Quadrature on ``nodes`` (the next step's)
+    rcond: float = np.nan    # smallest MLS rcond at the last step's integration points
 
 
 @dataclass
@@ -150,12 +152,19 @@ def _initial_points(model):
 
 
 def _step(model, points, t0, t1, stats):
-    """One step on the configuration of ``points``: new points, iterations, residual."""
+    """One step on the configuration of ``points``: new points, iterations, residual.
+
+    The new points carry the background cells of their own configuration, on which the
+    next step integrates (and its history row measures them), and the smallest rcond of
+    this step's MLS moment matrices (:func:`_min_rcond`)."""
     disc = _discretise(model, points.nodes, np.vstack([points.nodes, points.probes]),
-                       stats["timings"])
+                       stats["timings"], points.cells)
     system = _System(model, points, disc, t0, t1, stats["timings"])
     iterations, residual = newton(system, stats)
     done = system.finish()
+    with timed(stats["timings"], "cells_s"):
+        done.cells = _cells(model, done.nodes)
+    done.rcond = _min_rcond(disc)
     if model.case.diagnostics.uniqueness:
         done.uniqueness = _uniqueness(model, disc, system.domain_tangent(), system.n)
     return done, iterations, residual
@@ -412,12 +421,28 @@ class _AtPoints:
     probes: ShapeFunctions
 
 
-def _discretise(model, nodes, evaluation, timings):
-    """Cells, shape functions (built once when u and p_w share their settings) and block
-    patterns on the configuration ``nodes``; phase times added to ``timings``."""
+def _cells(model, nodes):
+    """The background cells (:func:`efg.quadrature.background`) of the configuration
+    ``nodes``."""
+    return background(model.case, nodes, model.loop, model.case.efg)
+
+
+def _min_rcond(disc):
+    """Smallest reciprocal condition number of the MLS moment matrices of a step, over
+    its integration points: the cells' Gauss points and the boundary points, u and p_w
+    (the support-coverage check, :class:`efg.mls.ShapeFunctions`)."""
+    return float(min(shape.rcond.min(initial=np.inf)
+                     for shape in (disc.su, disc.sp, disc.sub, disc.spb)))
+
+
+def _discretise(model, nodes, evaluation, timings, quad=None):
+    """Cells (``quad`` when given: the background cells of ``nodes``, built at the end
+    of the step before), shape functions (built once when u and p_w share their
+    settings) and block patterns on the configuration ``nodes``; phase times added to
+    ``timings``."""
     case, s = model.case, model.case.efg
     with timed(timings, "cells_s"):
-        quad = background(case, nodes, model.loop, s)
+        quad = _cells(model, nodes) if quad is None else quad
         bp = boundary_points(nodes, model.loop, model.edges)
     same = (s.weight_u, s.scale_u) == (s.weight_p, s.scale_p)
 
@@ -491,7 +516,14 @@ def _penalties(model, times):
 
 
 def _history_row(model, points, t, dt, info):
-    """:func:`soil.coupling.history_row` of the nodes (equal weights)."""
+    """:func:`soil.coupling.history_row` of the nodes (equal weights).
+
+    ``min_angle`` and ``min_quality`` are those of the background cells of the
+    configuration at the end of the step, which :func:`_step` builds and keeps on the
+    points, so the next step integrates on the very cells measured here (no cells are
+    built twice); square cells stay squares (90 degrees, quality 1, quarter cells
+    included). ``min_rcond`` is the step's (:func:`_min_rcond`; of the last substep of a
+    level that was cut back)."""
     case = model.case
     top = model.loop[model.edges == EDGES.index("top")]
     probes = ()
@@ -508,7 +540,8 @@ def _history_row(model, points, t, dt, info):
                                               points.reactions)]
     return history_row(case, t, dt, info, points.stress, points.stretching,
                        points.nodes[top], nodes0[top], probes=probes,
-                       uniqueness=uniqueness, segments=segments)
+                       uniqueness=uniqueness, segments=segments, cells=points.cells.cells,
+                       rcond=points.rcond)
 
 
 def _snapshot(model, points, t):

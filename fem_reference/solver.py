@@ -416,7 +416,9 @@ def _norm(reduced, con, force, volume, pin):
 
 
 def _history_row(model, current, t, dt, info):
-    """:func:`soil.coupling.history_row` of the quadrature points (weighted by volume)."""
+    """:func:`soil.coupling.history_row` of the quadrature points (weighted by volume);
+    ``min_angle`` and ``min_quality`` of the elements on the moved mesh (their corner
+    vertices: the straight-sided cell of a Taylor-Hood or Q2 element)."""
     case = model.case
     top = model.space.mesh0.p[1] > case.geometry.height * (1 - 1e-9)
     probes = ()
@@ -432,7 +434,7 @@ def _history_row(model, current, t, dt, info):
                        current.vertices[top], nodes0[top],
                        current.weights / current.weights.sum(), probes,
                        current.uniqueness if case.diagnostics.uniqueness else None,
-                       segments)
+                       segments, cells=current.vertices[model.space.corners])
 
 
 def _snapshot(model, current, t):

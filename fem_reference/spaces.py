@@ -14,6 +14,7 @@ step without remapping.
 """
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.spatial import Delaunay
@@ -121,6 +122,19 @@ class Space:
         """Displacement basis on the current facets of one edge (for tractions)."""
         return FacetBasis(mesh, self.pair.u_element(), facets=self.edge_facets[edge],
                           intorder=self.pair.intorder)
+
+    @cached_property
+    def corners(self):
+        """Vertex indices of every element (E, 3 or 4), counter-clockwise on the initial
+        mesh: scikit-fem sorts each triangle's indices, which leaves half the grid's
+        triangles clockwise; ``vertices[corners]`` are the cells of
+        :func:`soil.quality.cell_quality`."""
+        t = self.mesh0.t.T.copy()
+        p = self.mesh0.p.T[t]
+        a, b = p[:, 1] - p[:, 0], p[:, -1] - p[:, 0]
+        clockwise = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0] < 0
+        t[clockwise] = t[clockwise, ::-1]
+        return t
 
     @property
     def cell_type(self):

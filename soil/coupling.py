@@ -25,6 +25,7 @@ from tqdm import tqdm
 from soil.errors import ConvergenceError
 from soil.kinematics import IDENTITY, invariants, strain_increment
 from soil.linear import factorise, identity, must_refactorise
+from soil.quality import cell_quality
 from soil.results import Result
 
 #: Newton tolerance on the scaled residuals (see :class:`Scales`).
@@ -286,7 +287,7 @@ def material_update(material, stress, state, H, timings, where="an integration p
 
 
 def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, probes=(),
-                uniqueness=None, segments=()):
+                uniqueness=None, segments=(), cells=None, rcond=None):
     """One row of a coupled run's history.
 
     Parameters
@@ -313,6 +314,12 @@ def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, 
         force the boundary exerts on the soil over it (reaction, per unit thickness, y
         up positive [kN/m]) and the plate unknown (uy [m]) of a load-controlled footing,
         else None.
+    cells : ndarray, shape (C, V, 2), optional
+        The current cells (FEM elements or EFG background cells), counter-clockwise in
+        their undeformed state, V = 3 or 4 (:func:`soil.quality.cell_quality`).
+    rcond : float, optional
+        The smallest reciprocal condition number of the MLS moment matrix over the
+        level's integration points (EFG).
 
     Returns
     -------
@@ -321,9 +328,17 @@ def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, 
         p', q [kPa]), ``err`` (:func:`stretching_error`), ``gamma`` (mean horizontal
         displacement of the top over the height), ``dt``, ``iterations``, ``substeps``,
         ``residual``, ``p_w@NAME`` per probe, if given, ``uniqueness`` and per segment
-        ``settlement@NAME`` and ``pressure@NAME`` (:func:`segment_columns`).
+        ``settlement@NAME`` and ``pressure@NAME`` (:func:`segment_columns`); with
+        ``cells``, ``min_angle`` [degrees] and ``min_quality`` (the worst cell's
+        :func:`soil.quality.cell_quality`), with ``rcond``, ``min_rcond``.
     """
     p, q = invariants(stress)
+    quality = {}
+    if cells is not None:
+        angle, shape = cell_quality(cells)
+        quality = {"min_angle": float(angle.min()), "min_quality": float(shape.min())}
+    if rcond is not None:
+        quality["min_rcond"] = float(rcond)
     contact = {}
     for seg, nodes, nodes0, reaction, plate in segments:
         contact.update(segment_columns(seg, t, nodes, nodes0, reaction, plate))
@@ -333,7 +348,8 @@ def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, 
             "gamma": np.mean(top[:, 0] - top0[:, 0]) / case.geometry.height,
             "dt": dt, "iterations": info["iterations"], "substeps": info["substeps"],
             "residual": info["residual"], **{f"p_w@{name}": v for name, v in probes},
-            **({} if uniqueness is None else {"uniqueness": uniqueness}), **contact}
+            **({} if uniqueness is None else {"uniqueness": uniqueness}), **contact,
+            **quality}
 
 
 def segment_columns(segment, t, nodes, nodes0, reaction, plate=None):
