@@ -27,8 +27,8 @@ BUILTIN = builtin_cases()
 def test_builtins_are_the_case_files_by_name():
     assert Path(str(files("cases"))).resolve() == CASES
     assert list(BUILTIN) == sorted(p.stem for p in CASES.glob("*.toml")) == [
-        "cantilever", "mandel", "patch-test", "simple-shear", "soil-column", "terzaghi",
-        "unconfined-compression"]
+        "cantilever", "mandel", "patch-test", "simple-shear", "soil-column",
+        "strip-footing", "terzaghi", "unconfined-compression"]
 
 
 @pytest.mark.parametrize("name", list(BUILTIN))
