@@ -28,9 +28,10 @@ the gap ``u^h - u_bar`` of its constrained components, so reactions carried in e
 steps are not lost (a velocity-controlled footing's uy target is -rate x t). A rigid plate
 (Mandel) or a load-controlled footing adds one unknown, its settlement; its total force
 equals the edge load or the footing's force. The reaction of each named segment is the
-penalty (or plate) force over its points, ``-sum alpha w gap_y``. When no boundary is drained or free and the constituents are
-incompressible, the pore pressure is defined up to a constant: the mean change of p_w over
-the domain is then pinned to zero by one Lagrange multiplier.
+penalty (or plate) force over its points, ``-sum alpha w gap_y``. When no boundary is
+drained or free and the constituents are incompressible, the pore pressure is defined up
+to a constant: the mean change of p_w over the domain is then pinned to zero by one
+Lagrange multiplier.
 """
 
 from dataclasses import dataclass, replace
