@@ -47,12 +47,18 @@ class Geometry:
 
 @dataclass(frozen=True)
 class Discretisation:
-    """Regular grid of ``nx x ny`` nodes, optionally plus one node per cell centre.
+    """Grid of ``nx x ny`` nodes, optionally plus one node per cell centre.
+
+    ``grading = (rx, ry)`` is the ratio of the last grid spacing to the first along x
+    (left to right) and along y (bottom to top), the spacings growing geometrically in
+    between: ``(1, 1)`` is the regular grid, ``(8, 0.125)`` a grid eight times finer at the
+    left and at the top than at the right and at the bottom (a footing at the top-left
+    corner).
 
     ``jitter`` moves every interior node by a uniform random offset of up to ``jitter``
-    times the grid spacing in each direction (boundary nodes stay on their edges), drawn
-    with ``numpy.random.default_rng(seed)``: a perturbation of the node set, used to probe
-    how a result depends on round-off-sized changes of the geometry.
+    times the smallest grid spacing in each direction (boundary nodes stay on their
+    edges), drawn with ``numpy.random.default_rng(seed)``: a perturbation of the node set,
+    used to probe how a result depends on round-off-sized changes of the geometry.
     """
 
     nx: int
@@ -60,6 +66,30 @@ class Discretisation:
     layout: str = "grid"
     jitter: float = 0.0
     seed: int = 0
+    grading: tuple[float, float] = (1.0, 1.0)
+
+    @property
+    def graded(self):
+        """True unless the grid is regular (``grading = (1, 1)``)."""
+        return tuple(self.grading) != (1.0, 1.0)
+
+
+def grid_line(length, n, ratio):
+    """``n`` grid coordinates on ``[0, length]`` [m] whose last spacing is ``ratio`` times
+    the first, growing geometrically (a regular grid for ``ratio = 1``).
+
+    Examples
+    --------
+    >>> grid_line(7.0, 4, 4.0).tolist()
+    [0.0, 1.0, 3.0, 7.0]
+    >>> grid_line(1.0, 3, 1.0).tolist()
+    [0.0, 0.5, 1.0]
+    """
+    if ratio == 1 or n < 3:
+        return np.linspace(0.0, length, n)
+    steps = ratio ** (np.arange(n - 1) / (n - 2))
+    line = np.concatenate([[0.0], np.cumsum(steps)])
+    return length * line / line[-1]
 
 
 @dataclass(frozen=True)
@@ -343,9 +373,19 @@ class Case:
 
     @property
     def spacing(self):
-        """Grid spacing ``(hx, hy)`` [m]."""
-        d = self.discretisation
-        return self.geometry.width / (d.nx - 1), self.geometry.height / (d.ny - 1)
+        """Smallest grid spacing ``(hx, hy)`` [m]: ``width / (nx - 1)`` and
+        ``height / (ny - 1)`` on a regular grid."""
+        d, g = self.discretisation, self.geometry
+        return tuple(length / (n - 1) if ratio == 1 else float(np.diff(line).min())
+                     for length, n, ratio, line in zip((g.width, g.height), (d.nx, d.ny),
+                                                       d.grading, self.grid_lines()))
+
+    def grid_lines(self):
+        """Coordinates of the grid lines ``(x (nx,), y (ny,))`` [m]
+        (:attr:`Discretisation.grading`)."""
+        d, g = self.discretisation, self.geometry
+        return (grid_line(g.width, d.nx, d.grading[0]),
+                grid_line(g.height, d.ny, d.grading[1]))
 
     def nodes(self):
         """Initial node coordinates, shape (N, 2) [m].
@@ -353,8 +393,8 @@ class Case:
         Grid nodes row by row from the bottom (x fastest), then, for ``grid+centres``,
         the cell centres in the same order: ``N = nx ny (+ (nx-1)(ny-1))``.
         """
-        d, g = self.discretisation, self.geometry
-        x, y = np.linspace(0.0, g.width, d.nx), np.linspace(0.0, g.height, d.ny)
+        d = self.discretisation
+        x, y = self.grid_lines()
         grid = np.stack(np.meshgrid(x, y), axis=-1).reshape(-1, 2)
         if d.layout == "grid+centres":
             xc, yc = (x[:-1] + x[1:]) / 2, (y[:-1] + y[1:]) / 2

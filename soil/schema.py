@@ -29,9 +29,13 @@ Schema (every case has the same one; unknown keys are an error)::
     nx = 7                            # grid nodes along x (>= 2): spacing width/(nx-1)
     ny = 9                            # grid nodes along y (>= 2): spacing height/(ny-1)
     layout = "grid+centres"           # "grid" (default) or grid plus one node per cell centre
-                                      # (spacing aspect hx/hy in [1e-3, 1e3])
+                                      # (spacing aspect hx/hy of every cell in [1e-3, 1e3])
+    grading = [1.0, 1.0]              # last spacing over first along x (left to right) and
+                                      # y (bottom to top), geometric in between; each in
+                                      # [1e-3, 1e3]; 1 is regular (needs nx, ny >= 3
+                                      # otherwise; square EFG cells need a regular grid)
     jitter = 0.0                      # interior nodes moved at random by up to this
-                                      # fraction of the spacing (0 <= jitter < 0.25)
+                                      # fraction of the smallest spacing (0 <= jitter < 0.25)
     seed = 0                          # seed of the jitter (numpy default_rng)
 
     [material]                        # soil.materials.material_from_spec, plus fluid keys:
@@ -195,7 +199,7 @@ SECTIONS = ("geometry", "discretisation", "material", "initial", "boundary", "lo
 ``analysis``."""
 KEYS = {
     "geometry": ("shape", "width", "height"),
-    "discretisation": ("nx", "ny", "layout", "jitter", "seed"),
+    "discretisation": ("nx", "ny", "layout", "jitter", "seed", "grading"),
     "diagnostics": ("uniqueness",),
     "initial": ("pore_pressure",),
     "edge": ("ux", "uy", "displacement", "traction", "water"),
@@ -215,6 +219,8 @@ LENGTHS = (1e-6, 1e6)
 """Accepted range of ``geometry.width`` and ``height`` [m]."""
 ASPECTS = (1e-3, 1e3)
 """Accepted range of the grid spacing aspect ``hx/hy``."""
+GRADINGS = (1e-3, 1e3)
+"""Accepted range of each ratio of ``discretisation.grading`` (last spacing over first)."""
 SCALES = (1.0, 1e3)
 """Accepted range of the MLS support scale factors ``efg.scale_u`` and ``scale_p``."""
 MAX_TRIANGLE_ORDER = 19

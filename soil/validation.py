@@ -19,8 +19,8 @@ from soil.case import (ANALYSES, EDGES, KINDS, LAYOUTS, MAX_STEPS, ON_FAILURE,
                        TimeStepping)
 from soil.errors import InputError, require
 from soil.materials import FLUID_KEYS, material_from_spec
-from soil.schema import (ASPECTS, GEOMETRIC, KEYS, LENGTHS, MAX_TRIANGLE_ORDER, SCALES,
-                         SECTIONS, expand_displacement)
+from soil.schema import (ASPECTS, GEOMETRIC, GRADINGS, KEYS, LENGTHS, MAX_TRIANGLE_ORDER,
+                         SCALES, SECTIONS, expand_displacement)
 from soil.settings import (CELLS, CORRECTIONS, DEFAULT_SCALE, STABILISATIONS, EFGSettings,
                            Weight)
 
@@ -149,18 +149,33 @@ def _discretisation(table):
     seed = table.get("seed", 0)
     require(isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0,
             f"discretisation.seed = {seed!r} must be a non-negative integer")
+    grading = _pair(table.get("grading", [1.0, 1.0]), "discretisation.grading")
+    for axis, n, ratio in zip("xy", (nx, ny), grading):
+        require(GRADINGS[0] <= ratio <= GRADINGS[1], f"discretisation.grading = "
+                f"{list(grading)}: the {axis} ratio {ratio:g} (last spacing over first) must "
+                f"lie in [{GRADINGS[0]:g}, {GRADINGS[1]:g}]; 1 is a regular grid")
+        require(ratio == 1 or n >= 3, f"discretisation.grading = {list(grading)} grades "
+                f"{axis} with n{axis} = {n}: a graded direction needs n{axis} >= 3 nodes")
     return Discretisation(nx=nx, ny=ny,
                           layout=_string(table, "layout", "discretisation", "grid", LAYOUTS),
-                          jitter=jitter, seed=seed)
+                          jitter=jitter, seed=seed, grading=grading)
 
 
 def _require_aspect(case):
-    """Refuse sliver cells: the spacing aspect hx/hy must lie in :data:`ASPECTS`."""
-    hx, hy = case.spacing
-    require(ASPECTS[0] <= hx / hy <= ASPECTS[1], f"discretisation: the grid spacing aspect "
-            f"hx/hy = {hx:g}/{hy:g} = {hx / hy:g} (geometry.width/(discretisation.nx - 1) "
-            f"over geometry.height/(discretisation.ny - 1)) must lie in [{ASPECTS[0]:g}, "
-            f"{ASPECTS[1]:g}]: change discretisation.nx or discretisation.ny")
+    """Refuse sliver cells: the spacing aspect hx/hy of every grid cell must lie in
+    :data:`ASPECTS`; square background cells need a regular grid."""
+    (hx, hy), grading = case.spacing, case.discretisation.grading
+    hx_max, hy_max = (h if ratio == 1 else np.diff(line).max() for h, ratio, line
+                      in zip(case.spacing, grading, case.grid_lines()))
+    for a, b in ((hx, hy_max), (hx_max, hy)):
+        require(ASPECTS[0] <= a / b <= ASPECTS[1], f"discretisation: the grid spacing aspect "
+                f"hx/hy = {a:g}/{b:g} = {a / b:g} (spacing along x over spacing along y of "
+                f"a cell) must lie in [{ASPECTS[0]:g}, {ASPECTS[1]:g}]: change "
+                "discretisation.nx, discretisation.ny or discretisation.grading")
+    require(case.efg.cells != "squares" or not case.discretisation.graded,
+            f"efg.cells = 'squares' needs a regular grid, and discretisation.grading = "
+            f"{list(case.discretisation.grading)}: use efg.cells = 'delaunay' or grading = "
+            "[1, 1]")
 
 
 def _diagnostics(table):
