@@ -49,11 +49,13 @@ class Geometry:
 class Discretisation:
     """Grid of ``nx x ny`` nodes, optionally plus one node per cell centre.
 
-    ``grading = (rx, ry)`` is the ratio of the last grid spacing to the first along x
-    (left to right) and along y (bottom to top), the spacings growing geometrically in
-    between: ``(1, 1)`` is the regular grid, ``(8, 0.125)`` a grid eight times finer at the
-    left and at the top than at the right and at the bottom (a footing at the top-left
-    corner).
+    The grid lines are regular, or, where ``x`` (``y``) is given, laid out piece by piece
+    along x (y): each piece ``(to, spacings, ratio)`` runs from the end of the previous
+    one (0 for the first) to ``to`` [m] in ``spacings`` grid spacings, the last of which is
+    ``ratio`` times the first, growing geometrically in between (1: equal spacings).
+    ``((1.0, 16, 1.0), (20.0, 24, 30.0))`` is 16 equal spacings over the first metre, then
+    24 growing thirty-fold to 20 m: fine where a footing sits, coarse far from it. ``nx``
+    (``ny``) is then one more than the pieces' spacings.
 
     ``jitter`` moves every interior node by a uniform random offset of up to ``jitter``
     times the smallest grid spacing in each direction (boundary nodes stay on their
@@ -66,30 +68,44 @@ class Discretisation:
     layout: str = "grid"
     jitter: float = 0.0
     seed: int = 0
-    grading: tuple[float, float] = (1.0, 1.0)
+    x: tuple[tuple[float, int, float], ...] = ()
+    y: tuple[tuple[float, int, float], ...] = ()
 
     @property
-    def graded(self):
-        """True unless the grid is regular (``grading = (1, 1)``)."""
-        return tuple(self.grading) != (1.0, 1.0)
+    def regular(self):
+        """True when the grid lines are equally spaced along both axes (no pieces)."""
+        return not (self.x or self.y)
+
+    def to_dict(self):
+        """The ``[discretisation]`` table: ``x`` (``y``) instead of ``nx`` (``ny``) where
+        the grid is laid out in pieces."""
+        data = {k: v for k, v in asdict(self).items() if k not in ("x", "y")}
+        for axis in ("x", "y"):
+            if getattr(self, axis):
+                data.pop(f"n{axis}")
+                data[axis] = getattr(self, axis)
+        return data
 
 
-def grid_line(length, n, ratio):
-    """``n`` grid coordinates on ``[0, length]`` [m] whose last spacing is ``ratio`` times
-    the first, growing geometrically (a regular grid for ``ratio = 1``).
+def grid_line(length, n, pieces=()):
+    """Grid coordinates [m] on ``[0, length]``: ``n`` equally spaced, or laid out by
+    ``pieces`` ``(to, spacings, ratio)`` (:class:`Discretisation`).
 
     Examples
     --------
-    >>> grid_line(7.0, 4, 4.0).tolist()
-    [0.0, 1.0, 3.0, 7.0]
-    >>> grid_line(1.0, 3, 1.0).tolist()
+    >>> grid_line(1.0, 3).tolist()
     [0.0, 0.5, 1.0]
+    >>> grid_line(8.0, 5, ((1.0, 1, 1.0), (8.0, 3, 4.0))).tolist()
+    [0.0, 1.0, 2.0, 4.0, 8.0]
     """
-    if ratio == 1 or n < 3:
+    if not pieces:
         return np.linspace(0.0, length, n)
-    steps = ratio ** (np.arange(n - 1) / (n - 2))
-    line = np.concatenate([[0.0], np.cumsum(steps)])
-    return length * line / line[-1]
+    lines, start = [[0.0]], 0.0
+    for to, spacings, ratio in pieces:
+        steps = ratio ** (np.arange(spacings) / max(spacings - 1, 1))
+        lines.append(start + (to - start) * np.cumsum(steps) / steps.sum())
+        lines[-1][-1] = start = to
+    return np.concatenate(lines)
 
 
 @dataclass(frozen=True)
@@ -376,16 +392,15 @@ class Case:
         """Smallest grid spacing ``(hx, hy)`` [m]: ``width / (nx - 1)`` and
         ``height / (ny - 1)`` on a regular grid."""
         d, g = self.discretisation, self.geometry
-        return tuple(length / (n - 1) if ratio == 1 else float(np.diff(line).min())
-                     for length, n, ratio, line in zip((g.width, g.height), (d.nx, d.ny),
-                                                       d.grading, self.grid_lines()))
+        return tuple(float(np.diff(line).min()) if pieces else length / (n - 1)
+                     for length, n, pieces, line in zip((g.width, g.height), (d.nx, d.ny),
+                                                        (d.x, d.y), self.grid_lines()))
 
     def grid_lines(self):
-        """Coordinates of the grid lines ``(x (nx,), y (ny,))`` [m]
-        (:attr:`Discretisation.grading`)."""
+        """Coordinates of the grid lines ``(x (nx,), y (ny,))`` [m] (regular, or laid out
+        by the pieces of :class:`Discretisation`)."""
         d, g = self.discretisation, self.geometry
-        return (grid_line(g.width, d.nx, d.grading[0]),
-                grid_line(g.height, d.ny, d.grading[1]))
+        return grid_line(g.width, d.nx, d.x), grid_line(g.height, d.ny, d.y)
 
     def nodes(self):
         """Initial node coordinates, shape (N, 2) [m].
@@ -477,7 +492,7 @@ class Case:
         return _plain({
             "name": self.name, "description": self.description, "analysis": self.analysis,
             "geometry": asdict(self.geometry),
-            "discretisation": asdict(self.discretisation),
+            "discretisation": self.discretisation.to_dict(),
             "material": {**dict(self.material_spec), **asdict(self.fluid)},
             "initial": asdict(self.initial),
             "boundary": {name: edge.to_dict() for name, edge in self.boundary.items()},

@@ -30,10 +30,13 @@ Schema (every case has the same one; unknown keys are an error)::
     ny = 9                            # grid nodes along y (>= 2): spacing height/(ny-1)
     layout = "grid+centres"           # "grid" (default) or grid plus one node per cell centre
                                       # (spacing aspect hx/hy of every cell in [1e-3, 1e3])
-    grading = [1.0, 1.0]              # last spacing over first along x (left to right) and
-                                      # y (bottom to top), geometric in between; each in
-                                      # [1e-3, 1e3]; 1 is regular (needs nx, ny >= 3
-                                      # otherwise; square EFG cells need a regular grid)
+    # x = [[1.0, 16], [20.0, 24, 30.0]] # instead of nx: the grid lines along x in pieces
+                                      # [to (m), spacings, ratio]: from the previous
+                                      # piece's end (or 0) to "to" (increasing, the last
+                                      # at the width), the last spacing "ratio" times the
+                                      # first (default 1, in [1e-3, 1e3]), geometric in
+                                      # between; y (instead of ny) likewise, bottom to
+                                      # top; square EFG cells need a regular grid
     jitter = 0.0                      # interior nodes moved at random by up to this
                                       # fraction of the smallest spacing (0 <= jitter < 0.25)
     seed = 0                          # seed of the jitter (numpy default_rng)
@@ -185,7 +188,8 @@ stepping (``dt = min(0.5 t, 0.1)``, peer-data case A): 118 steps to t = 10.
 :func:`soil.problems.load_case` also takes overrides ``"section.key=value"`` (value in
 TOML syntax, a bare word is read as a string; :func:`apply_override`), e.g.
 ``material.permeability=1e-6`` or ``boundary.top.water="drained"``. Setting
-``time.steps`` drops the geometric keys (and the reverse); setting an edge's
+``time.steps`` drops the geometric keys (and the reverse), setting ``discretisation.nx``
+drops ``discretisation.x`` (and the reverse; likewise ``ny`` and ``y``); setting an edge's
 ``displacement`` replaces its ``ux`` and ``uy``.
 """
 
@@ -199,7 +203,7 @@ SECTIONS = ("geometry", "discretisation", "material", "initial", "boundary", "lo
 ``analysis``."""
 KEYS = {
     "geometry": ("shape", "width", "height"),
-    "discretisation": ("nx", "ny", "layout", "jitter", "seed", "grading"),
+    "discretisation": ("nx", "ny", "x", "y", "layout", "jitter", "seed"),
     "diagnostics": ("uniqueness",),
     "initial": ("pore_pressure",),
     "edge": ("ux", "uy", "displacement", "traction", "water"),
@@ -220,7 +224,8 @@ LENGTHS = (1e-6, 1e6)
 ASPECTS = (1e-3, 1e3)
 """Accepted range of the grid spacing aspect ``hx/hy``."""
 GRADINGS = (1e-3, 1e3)
-"""Accepted range of each ratio of ``discretisation.grading`` (last spacing over first)."""
+"""Accepted range of the ratio of a grid piece (``discretisation.x``, ``y``: last spacing
+over first)."""
 SCALES = (1.0, 1e3)
 """Accepted range of the MLS support scale factors ``efg.scale_u`` and ``scale_p``."""
 MAX_TRIANGLE_ORDER = 19
@@ -238,8 +243,9 @@ def apply_override(data, text):
     text : str
         ``section.key=value`` with the value in TOML syntax (a bare word is read as a
         string), e.g. ``material.permeability=1e-6`` or ``boundary.top.water=drained``.
-        Setting ``time.steps`` drops the geometric keys (and the reverse); setting an
-        edge's ``displacement`` replaces its ``ux`` and ``uy``, and setting ``ux`` or
+        Setting ``time.steps`` drops the geometric keys (and the reverse), setting
+        ``discretisation.nx`` drops ``discretisation.x`` (and the reverse, likewise for y);
+        setting an edge's ``displacement`` replaces its ``ux`` and ``uy``, and setting ``ux`` or
         ``uy`` of an edge given by ``displacement`` expands the shorthand first.
 
     Raises
@@ -281,6 +287,8 @@ def _replaced_keys(path):
         return GEOMETRIC
     if path[0] == "time" and path[-1] in GEOMETRIC:
         return ("steps",)
+    if path[0] == "discretisation" and path[-1] in ("nx", "ny", "x", "y"):
+        return ({"nx": "x", "ny": "y", "x": "nx", "y": "ny"}[path[-1]],)
     if path[0] == "boundary" and path[-1] == "displacement":
         return ("ux", "uy")
     return ()

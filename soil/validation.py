@@ -14,9 +14,9 @@ import numpy as np
 
 from soil.analytical import exact_solution
 from soil.case import (ANALYSES, EDGES, KINDS, LAYOUTS, MAX_STEPS, ON_FAILURE,
-                       SEGMENT_KINDS, WATER, Boundary, Case, Diagnostics, Discretisation,
-                       Edge, Fluid, Geometry, Initial, Loading, Probe, Segment,
-                       TimeStepping)
+                       SEGMENT_KINDS, SEGMENT_TOLERANCE, WATER, Boundary, Case, Diagnostics,
+                       Discretisation, Edge, Fluid, Geometry, Initial, Loading, Probe,
+                       Segment, TimeStepping)
 from soil.errors import InputError, require
 from soil.materials import FLUID_KEYS, material_from_spec
 from soil.schema import (ASPECTS, GEOMETRIC, GRADINGS, KEYS, LENGTHS, MAX_TRIANGLE_ORDER,
@@ -59,7 +59,7 @@ def case_from_dict(data):
         description=_string(data, "description", "case", ""),
         analysis=_string(data, "analysis", "case", "coupled", ANALYSES),
         geometry=geometry,
-        discretisation=_discretisation(_section(data, "discretisation")),
+        discretisation=_discretisation(_section(data, "discretisation"), geometry),
         material_spec=material_spec, fluid=fluid,
         initial=_initial(_section(data, "initial", {})),
         boundary=_boundary(_section(data, "boundary"), loading, geometry),
@@ -73,6 +73,7 @@ def case_from_dict(data):
     _require_aspect(case)
     _require_exact_if_used(case)
     _require_coupled_footings(case)
+    _require_segments_on_nodes(case)
     case.times()
     return case
 
@@ -138,44 +139,70 @@ def _geometry(table):
     return Geometry(width=width, height=height)
 
 
-def _discretisation(table):
+def _discretisation(table, geometry):
     _check_keys(table, KEYS["discretisation"], "discretisation")
-    nx, ny = _integer(table, "nx", "discretisation"), _integer(table, "ny", "discretisation")
-    require(nx >= 2, f"discretisation.nx = {nx} must be at least 2 (nodes along x)")
-    require(ny >= 2, f"discretisation.ny = {ny} must be at least 2 (nodes along y)")
+    counts, pieces = {}, {}
+    for axis, length in (("x", geometry.width), ("y", geometry.height)):
+        key = f"n{axis}"
+        require(not (table.get(axis) and key in table), f"discretisation: give {key} or "
+                f"{axis} (the grid in pieces), not both: remove one of them")
+        if table.get(axis):
+            pieces[axis] = _pieces(table[axis], f"discretisation.{axis}", length)
+            counts[key] = 1 + sum(count for _, count, _ in pieces[axis])
+        else:
+            counts[key] = _integer(table, key, "discretisation")
+            require(counts[key] >= 2, f"discretisation.{key} = {counts[key]} must be at "
+                    f"least 2 (nodes along {axis})")
     jitter = _number(table, "jitter", "discretisation", 0.0)
     require(0 <= jitter < 0.25, f"discretisation.jitter = {jitter} must lie in [0, 0.25) "
-            "(a fraction of the nodal spacing)")
+            "(a fraction of the smallest nodal spacing)")
     seed = table.get("seed", 0)
     require(isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0,
             f"discretisation.seed = {seed!r} must be a non-negative integer")
-    grading = _pair(table.get("grading", [1.0, 1.0]), "discretisation.grading")
-    for axis, n, ratio in zip("xy", (nx, ny), grading):
-        require(GRADINGS[0] <= ratio <= GRADINGS[1], f"discretisation.grading = "
-                f"{list(grading)}: the {axis} ratio {ratio:g} (last spacing over first) must "
-                f"lie in [{GRADINGS[0]:g}, {GRADINGS[1]:g}]; 1 is a regular grid")
-        require(ratio == 1 or n >= 3, f"discretisation.grading = {list(grading)} grades "
-                f"{axis} with n{axis} = {n}: a graded direction needs n{axis} >= 3 nodes")
-    return Discretisation(nx=nx, ny=ny,
+    return Discretisation(**counts,
                           layout=_string(table, "layout", "discretisation", "grid", LAYOUTS),
-                          jitter=jitter, seed=seed, grading=grading)
+                          jitter=jitter, seed=seed, **pieces)
+
+
+def _pieces(value, where, length):
+    """Grid pieces ``[[to, spacings(, ratio)], ...]`` along an edge of ``length`` [m] as a
+    tuple of ``(to, spacings, ratio)`` (:class:`soil.case.Discretisation`)."""
+    form = (f"{where} = {value!r} must be a list of pieces [to, spacings] or [to, spacings, "
+            f"ratio]: to in m, increasing to {length:g}, spacings an integer >= 1, ratio "
+            f"(last spacing over first) in [{GRADINGS[0]:g}, {GRADINGS[1]:g}]")
+    require(isinstance(value, (list, tuple)) and all(
+        isinstance(p, (list, tuple)) and len(p) in (2, 3) for p in value), form)
+    out, start = [], 0.0
+    for piece in value:
+        to = _number({"v": piece[0]}, "v", where)
+        spacings, ratio = piece[1], (_number({"v": piece[2]}, "v", where)
+                                     if len(piece) == 3 else 1.0)
+        require(isinstance(spacings, int) and not isinstance(spacings, bool)
+                and spacings >= 1 and to > start and GRADINGS[0] <= ratio <= GRADINGS[1],
+                form)
+        out.append((to, spacings, ratio))
+        start = to
+    require(abs(start - length) <= 1e-9 * length, f"{where}: the last piece ends at "
+            f"{start:g} m, the edge is {length:g} m long: end it at {length:g}")
+    out[-1] = (length, *out[-1][1:])
+    return tuple(out)
 
 
 def _require_aspect(case):
     """Refuse sliver cells: the spacing aspect hx/hy of every grid cell must lie in
     :data:`ASPECTS`; square background cells need a regular grid."""
-    (hx, hy), grading = case.spacing, case.discretisation.grading
-    hx_max, hy_max = (h if ratio == 1 else np.diff(line).max() for h, ratio, line
-                      in zip(case.spacing, grading, case.grid_lines()))
+    d = case.discretisation
+    hx, hy = case.spacing
+    hx_max, hy_max = (np.diff(line).max() if pieces else h for h, pieces, line
+                      in zip(case.spacing, (d.x, d.y), case.grid_lines()))
     for a, b in ((hx, hy_max), (hx_max, hy)):
         require(ASPECTS[0] <= a / b <= ASPECTS[1], f"discretisation: the grid spacing aspect "
                 f"hx/hy = {a:g}/{b:g} = {a / b:g} (spacing along x over spacing along y of "
                 f"a cell) must lie in [{ASPECTS[0]:g}, {ASPECTS[1]:g}]: change "
-                "discretisation.nx, discretisation.ny or discretisation.grading")
-    require(case.efg.cells != "squares" or not case.discretisation.graded,
-            f"efg.cells = 'squares' needs a regular grid, and discretisation.grading = "
-            f"{list(case.discretisation.grading)}: use efg.cells = 'delaunay' or grading = "
-            "[1, 1]")
+                "discretisation.nx, ny, x or y")
+    require(case.efg.cells != "squares" or d.regular, "efg.cells = 'squares' needs a "
+            "regular grid, and discretisation.x or y lays it out in pieces: use efg.cells = "
+            "'delaunay' or give discretisation.nx and ny instead")
 
 
 def _diagnostics(table):
@@ -348,6 +375,21 @@ def _require_coupled_footings(case):
                 if seg.footing]
     require(not footings or case.analysis == "coupled", f"{footings[0] if footings else ''}"
             ": a footing needs analysis = \"coupled\" (the static solver has none)")
+
+
+def _require_segments_on_nodes(case):
+    """Refuse a segment end between two grid nodes of its edge: the FEM reference would
+    impose the segment's kinds only up to the last node inside it, a shorter footing."""
+    x, y = case.grid_lines()
+    tol = SEGMENT_TOLERANCE * min(case.spacing)
+    for side, seg in case.boundary.segments():
+        line, axis = (x, "x") if side in ("top", "bottom") else (y, "y")
+        for key, end in (("from", seg.start), ("to", seg.end)):
+            k = np.searchsorted(line, end - tol)
+            require(abs(line[min(k, len(line) - 1)] - end) <= tol,
+                    f"boundary.{side}.{seg.name}.{key} = {end:g} lies between the grid nodes "
+                    f"at {axis} = {line[k - 1]:.6g} and {line[k]:.6g} m: put segment ends on "
+                    "grid nodes (change it, discretisation.n" + axis + " or " + axis + ")")
 
 
 def _traction(value, where):

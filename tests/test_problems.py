@@ -70,21 +70,26 @@ def test_unconfined_compression_has_111_nodes():
     assert isinstance(case.material(), CamClay) and case.material().ocr == 1.0
 
 
-def test_graded_grid_spacings_grow_geometrically():
-    case = load_case("strip-footing", ["discretisation.nx=9", "discretisation.ny=5",
-                                       "discretisation.grading=[8, 0.125]"])
+def test_grid_in_pieces_spacings_grow_geometrically():
+    case = load_case("strip-footing", ["discretisation.x=[[1.0, 4], [5.0, 4, 8.0]]",
+                                       "discretisation.y=[[4.0, 3, 0.25], [5.0, 2]]"])
     x, y = case.grid_lines()
     hx, hy = np.diff(x), np.diff(y)
-    assert x[-1] == 5.0 and y[-1] == 5.0
-    assert np.allclose(hx[1:] / hx[:-1], 8 ** (1 / 7)) and np.isclose(hx[-1] / hx[0], 8)
-    assert np.allclose(hy[1:] / hy[:-1], 0.125 ** (1 / 3))  # finest at the top
-    assert case.spacing == (hx[0], hy[-1])
+    assert (case.discretisation.nx, case.discretisation.ny) == (9, 6)
+    assert np.allclose(x[:5], [0, 0.25, 0.5, 0.75, 1.0]) and x[-1] == 5.0
+    assert np.allclose(hx[5:] / hx[4:-1], 2.0) and np.isclose(hx[-1] / hx[4], 8)
+    assert np.allclose(hy[1:3] / hy[:2], 0.5) and np.allclose(hy[3:], 0.5)
+    assert case.spacing == (0.25, hy.min())
     nodes = case.nodes()
-    assert nodes.shape == (45, 2) and np.allclose(nodes[:9, 0], x)
+    assert nodes.shape == (54, 2) and np.allclose(nodes[:9, 0], x)
     assert np.allclose(nodes[::9, 1], y)
+    assert case_from_dict(json.loads(json.dumps(case.to_dict()))) == case
     regular = load_case("strip-footing")
     assert regular.spacing == (0.25, 0.25)  # width / (nx - 1) exactly
     assert np.array_equal(regular.nodes()[:21, 0], np.linspace(0, 5, 21))
+    # nx replaces the pieces (and the reverse)
+    assert load_case("strip-footing", ["discretisation.x=[[5.0, 2]]",
+                                       "discretisation.nx=11"]).discretisation.x == ()
 
 
 def test_terzaghi_times_match_moose(peer):
@@ -192,19 +197,22 @@ REFUSED = [
     ("terzaghi", ["geometry.width=0"], "geometry.width = 0"),
     ("terzaghi", ["geometry.height=-1"], "geometry.height = -1"),
     ("terzaghi", ["time.end=inf"], "time.end = inf"),
-    ("terzaghi", ["discretisation.ny=5002"], "discretisation.ny"),  # hx/hy = 1000.2
-    ("soil-column", ["discretisation.nx=2002"], "discretisation.nx"),  # hx/hy = 1/1000.5
-    ("strip-footing", ["discretisation.grading=[0, 1]"], "discretisation.grading"),
-    ("strip-footing", ["discretisation.grading=2"], "discretisation.grading = 2"),
-    ("strip-footing", ["discretisation.grading=[1, 2000]"], "the y ratio 2000"),
-    ("strip-footing", ["discretisation.grading=[2, 1]", "discretisation.nx=2"], "nx >= 3"),
-    ("strip-footing", ["discretisation.grading=[2, 1]", "efg.cells=squares"],
+    ("terzaghi", ["discretisation.ny=5002"], "discretisation.nx, ny"),  # hx/hy = 1000.2
+    ("soil-column", ["discretisation.nx=2002"], "discretisation.nx, ny"),  # hx/hy 1/1000.5
+    ("strip-footing", ["discretisation.x=[[5.0, 0]]"], "discretisation.x"),
+    ("strip-footing", ["discretisation.nx=12"],
+     "boundary.top.footing.to = 0.5 lies between the grid nodes at x = 0.454545 and 0.909091"),
+    ("strip-footing", ["discretisation.y=[[5.0, 2, 0]]"], "discretisation.y"),
+    ("strip-footing", ["discretisation.x=[[3.0, 2], [2.0, 2]]"], "discretisation.x"),
+    ("strip-footing", ["discretisation.x=[[4.0, 2]]"], "the last piece ends at 4 m"),
+    ("strip-footing", ["discretisation.x=3"], "discretisation.x = 3"),
+    ("strip-footing", ["discretisation.y=[[5.0, 2, 2000]]"], "discretisation.y"),
+    ("strip-footing", ["discretisation.x=[[5.0, 4, 2]]", "efg.cells=squares"],
      "efg.cells = 'squares' needs a regular grid"),
-    # graded 1000-fold along both axes over 3 nodes: the widest cell (4.995 m) over the
+    # 1000-fold along both axes over 2 spacings: the widest cell (4.995 m) over the
     # flattest (0.003996 m) has the aspect 1250
-    ("strip-footing", ["discretisation.nx=3", "discretisation.ny=3", "geometry.height=4",
-                       "discretisation.grading=[1000, 0.001]"],
-     "discretisation.grading"),
+    ("strip-footing", ["discretisation.x=[[5.0, 2, 1000]]", "geometry.height=4",
+                       "discretisation.y=[[4.0, 2, 0.001]]"], "discretisation.nx, ny, x or y"),
     ("soil-column", FREE, "not supported along x (no edge restrains ux)"),
     ("mandel", ["boundary.bottom.uy=free"], "not supported along y"),
     ("soil-column", FREE[:2] + ["boundary.bottom.uy=free", "boundary.left.uy=fixed"],
