@@ -23,6 +23,7 @@ import numpy as np
 from scipy.spatial import ConvexHull
 
 from efg.quadrature import delaunay_cells
+from soil.quality import cell_quality
 
 
 def triangulation(snapshot):
@@ -139,6 +140,14 @@ def snapshot_strain(initial, snapshot, triangles):
     """eps_s of each triangle at one snapshot (:func:`shear_strain` of
     :func:`deformation_gradient`), from the snapshot's node positions."""
     return shear_strain(deformation_gradient(initial, snapshot.points, triangles))
+
+
+def smallest_angles(snapshots, triangles):
+    """Smallest interior angle [degrees] of each triangle at each snapshot, (S, T):
+    :func:`soil.quality.cell_quality` of the triangles on the snapshots' node positions
+    (negative where a triangle has inverted)."""
+    corners = np.stack([np.asarray(snap.points)[triangles] for snap in snapshots])
+    return cell_quality(corners.reshape(-1, 3, 2))[0].reshape(len(corners), -1)
 
 
 def _edges(points, triangles):

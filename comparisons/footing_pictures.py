@@ -30,17 +30,15 @@ from matplotlib.ticker import MaxNLocator  # noqa: E402
 from matplotlib.tri import Triangulation  # noqa: E402
 
 from comparisons import deformation, tables  # noqa: E402
-from comparisons.footing import CASE, GRIDS, METHODS, width  # noqa: E402
-from comparisons.verification import _results  # noqa: E402
-from soil.quality import cell_quality  # noqa: E402
+from comparisons.footing import CASE, DENSITIES, METHODS, width  # noqa: E402
+from comparisons.footing_grids import refined  # noqa: E402
+from comparisons.verification import solved  # noqa: E402
+from soil.quality import DISTORTED, cell_quality  # noqa: E402
 
-#: Nodes a side of the runs the report draws: the footing study's middle grid.
-GRID = GRIDS[len(GRIDS) // 2]
+#: Spacings per B at the footing of the runs the report draws: the built-in case's.
+CORE = DENSITIES[len(DENSITIES) // 2]
 #: Width and depth of the window next to the footing [B].
 ZOOM = 2.5
-#: An FEM element is outlined as distorted when its smallest angle is below this
-#: [degrees] (negative: inverted). The undeformed grid's triangles have 45 and 90.
-DISTORTED_ANGLE = 15.0
 #: Distance from the footing's edge [B] within which :func:`measures` takes the largest
 #: eps_s ("under the footing edge").
 EDGE_RADIUS = 0.5
@@ -57,16 +55,17 @@ STRAIN_LABEL = "shear strain eps_s = sqrt(2/3 e':e'), Hencky [-]"
 PRESSURE_LABEL = "excess pore pressure p_w - p_w0 [kPa], compression positive"
 
 
-def runs(grid=GRID, methods=METHODS):
-    """The footing study's runs of each method on ``grid x grid`` nodes (through the
-    cached runner: the runs of :func:`comparisons.footing.curves` are reused).
+def runs(core=CORE, methods=METHODS):
+    """The footing study's runs of each method with ``core`` spacings per B at the
+    footing (through the cached runner: the runs of :func:`comparisons.footing.curves`
+    are reused).
 
     Returns
     -------
     list of soil.results.Result
     """
-    return _results([(CASE, (f"discretisation.nx={grid}", f"discretisation.ny={grid}",
-                             *extra), method) for method, extra in methods.values()])
+    return solved([(CASE, (*refined(core), *extra), method)
+                   for method, extra in methods.values()])
 
 
 class _Run:
@@ -76,6 +75,7 @@ class _Run:
         self.result = result
         self.initial = np.asarray(result.snapshots[0].points, dtype=float)
         self.triangles = deformation.triangulation(result.snapshots[0])
+        self.angle0 = deformation.smallest_angles(result.snapshots[:1], self.triangles)[0]
         self.B = width(result.case)
         self.surface = result.case.geometry.height
         (_, self.segment), = result.case.boundary.segments()
@@ -135,9 +135,9 @@ class _Run:
 
     def strain_view(self, ax, norm):
         """Artists showing a snapshot coloured by eps_s on ``ax``: EFG nodes as dots
-        (area-averaged nodal values), FEM elements filled, those with a smallest angle
-        below :data:`DISTORTED_ANGLE` outlined in red, inverted ones (NaN eps_s)
-        magenta; and the footing.
+        (area-averaged nodal values), FEM elements filled, the distorted ones (smallest
+        angle below :data:`soil.quality.DISTORTED` of its undeformed value) outlined in
+        red, inverted ones (NaN eps_s) magenta; and the footing.
 
         Returns
         -------
@@ -168,8 +168,9 @@ class _Run:
                 angle, _ = cell_quality(corners)
                 cells.set_verts(corners)
                 cells.set_array(eps)
-                outlines.set_verts(corners[angle < DISTORTED_ANGLE])
-                return int((angle < DISTORTED_ANGLE).sum()), int((angle <= 0).sum())
+                distorted = angle < DISTORTED * self.angle0
+                outlines.set_verts(corners[distorted])
+                return int(distorted.sum()), int((angle <= 0).sum())
             mappable = cells
 
         def show(k):
@@ -253,7 +254,7 @@ def deformed_figure(results, path):
         ax.set_title(f"{run.label}\nsettlement {s / run.B:.2f} B, pressure {p:.3g} kPa",
                      fontsize=10)
         if counts is not None:
-            ax.text(0.97, 0.03, f"red: smallest angle < {DISTORTED_ANGLE:g} deg, "
+            ax.text(0.97, 0.03, f"red: smallest angle < {DISTORTED:.2g} of its start, "
                     f"{counts[0]} elements\nmagenta: inverted, {counts[1]}",
                     transform=ax.transAxes, ha="right", va="bottom", fontsize=8,
                     bbox={"facecolor": "white", "alpha": 0.85, "edgecolor": "none"})
@@ -383,9 +384,8 @@ def measures(results):
         ``eps_s_edge`` (largest triangle eps_s at the last level within
         :data:`EDGE_RADIUS` B of the footing's edge, by initial centroid),
         ``distorted`` and ``inverted`` (FEM elements at the last level with a smallest
-        angle below :data:`DISTORTED_ANGLE` / not above 0; empty for EFG),
-        ``distorted_from`` (the first settlement over B with a distorted element; empty
-        if none or EFG), ``dp_min``, ``dp_max`` (excess pore pressure in view at the
+        angle below :data:`soil.quality.DISTORTED` of its undeformed value / not above
+        0; empty for EFG), ``dp_min``, ``dp_max`` (excess pore pressure in view at the
         last level [kPa], compression positive).
     """
     rows = []
@@ -398,17 +398,12 @@ def measures(results):
         row = {"method": run.label, "nodes": len(run.initial),
                "reached": run.loads(run.final)[0] / run.B,
                "eps_s_edge": float(np.nanmax(run.strain(run.final)[near])),
-               "distorted": "", "inverted": "", "distorted_from": "",
+               "distorted": "", "inverted": "",
                "dp_min": float(seen.min()), "dp_max": float(seen.max())}
         if not run.cloud:
-            corners = np.stack([snap.points for snap in run.result.snapshots])[
-                :, run.triangles]                                  # (levels, T, 3, 2)
-            angles = cell_quality(corners.reshape(-1, 3, 2))[0].reshape(len(corners), -1)
-            first = np.flatnonzero(angles.min(axis=1) < DISTORTED_ANGLE)
-            row.update(distorted=int((angles[-1] < DISTORTED_ANGLE).sum()),
-                       inverted=int((angles[-1] <= 0).sum()),
-                       distorted_from=(run.loads(first[0])[0] / run.B if first.size
-                                       else ""))
+            last = deformation.smallest_angles(run.result.snapshots[-1:], run.triangles)[0]
+            row.update(distorted=int((last < DISTORTED * run.angle0).sum()),
+                       inverted=int((last <= 0).sum()))
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -434,13 +429,10 @@ def section(data):
         "initial nodes, the dots showing area-weighted nodal averages). The largest "
         f"eps_s within {EDGE_RADIUS:g} B of the footing's edge: "
         + ", ".join(f"{r.method} {r.eps_s_edge:.3g}" for r in table.itertuples())
-        + ". Elements outlined in red have a smallest angle below "
-        f"{DISTORTED_ANGLE:g} degrees: "
+        + ". Elements outlined in red are distorted, their smallest angle below "
+        f"{DISTORTED:.2g} of its undeformed value: "
         + ("; ".join(f"{r.method} {r.distorted} at the last level ({r.inverted} "
-                     "inverted)" + (f", the first at a settlement of "
-                                    f"{r.distorted_from:.3g} B" if r.distorted_from != ""
-                                    else "")
-                     for r in fem.itertuples()) if len(fem) else "no FEM run")
+                     "inverted)" for r in fem.itertuples()) if len(fem) else "no FEM run")
         + ".",
         "",
         "![excess pore pressure](figures/footing_pore_pressure.png)",

@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from comparisons import (figures, footing, infsup, peers, runner, stability_figures,
+from comparisons import (figures, footing, footing_consolidation, footing_domain,
+                         footing_pictures, infsup, peers, runner, stability_figures,
                          stability_report, tables, uniqueness, verification)
 
 
@@ -98,6 +99,19 @@ TASKS = [
     _table("footing curves", footing.curves, "footing_curves"),
     _table("footing", footing.summary, "footing", "footing curves"),
     _figure("footing figure", footing.figure, "footing", "footing curves"),
+    _figure("footing cost figure", footing.cost_figure, "footing_cost", "footing"),
+    _table("footing domain curves", footing_domain.curves, "footing_domain_curves"),
+    _table("footing domain", footing_domain.summary, "footing_domain",
+           "footing domain curves"),
+    _figure("footing domain figure", footing_domain.figure, "footing_domain",
+            "footing domain curves"),
+    _table("footing consolidation curves", footing_consolidation.curves,
+           "footing_consolidation_curves"),
+    _table("footing consolidation", footing_consolidation.summary,
+           "footing_consolidation", "footing consolidation curves", "footing curves"),
+    _figure("footing consolidation figure", footing_consolidation.figure,
+            "footing_consolidation", "footing consolidation curves"),
+    *footing_pictures.TASKS,
     _figure("consolidation figure", figures.consolidation, "consolidation",
             "terzaghi histories", "mandel histories"),
 ]
@@ -242,11 +256,7 @@ def _verdicts(uc, bif, fits, col, t2, ec, ft, foot):
         f"{ec.loc[('terzaghi', 'max_error_load_after_0.1')]:.3f} of the load, fem-th "
         f"{ft.loc[('fem-th', 'moose'), 'error_p0_after_0.1']:.3f} p0 (same steps) |",
         "| EFG handles large, non-uniform deformation where FEM meets mesh distortion "
-        "(introduction) | open | strip footing to 0.5 B, finest grid (" + (
-            finest := foot[foot.domain == foot.domain.min()].groupby("method").last())
-        .nodes.iloc[0] + "): reached " + ", ".join(
-            f"{m} {r.reached:.2g} B" for m, r in finest.iterrows())
-        + "; mesh quality and remeshed FEM, which would settle it, are not built yet |",
+        "(introduction) | " + " | ".join(footing.verdict(foot)) + " |",
         "",
     ]
 
@@ -398,6 +408,9 @@ def markdown(data):
         + f" of F/(2a) (closed form {_mandel_peak(mandel):.3f}): the Mandel-Cryer effect.",
         "",
         *footing.section(data["footing"]),
+        *footing_domain.section(data["footing domain"]),
+        *footing_consolidation.section(data["footing consolidation"]),
+        *footing_pictures.section(data),
         *_verdicts(uc, data["bifurcation"].set_index("run"), data["infsup slopes"],
                    data["column stability"], t2, ec, ft, data["footing"]),
         "## Where we differ from the paper",

@@ -99,7 +99,7 @@ def stress_paths(cases=tuple(PATH_CASES), runs=PATH_RUNS):
         the same strain.
     """
     settings = list(itertools.product(cases, runs.items()))
-    results = _results([(case, overrides + UNIQUENESS.get(case, ()), method)
+    results = solved([(case, overrides + UNIQUENESS.get(case, ()), method)
                         for case, (_, (method, overrides)) in settings])
     frames = []
     for (case, (label, _)), result in zip(settings, results):
@@ -164,7 +164,7 @@ def table2(scales=TABLE2_SCALES, combinations=COMBINATIONS, permeabilities=(0.0,
     """
     nx, ny = grid
     settings = list(itertools.product(permeabilities, combinations.items(), scales))
-    results = _results([("soil-column", (
+    results = solved([("soil-column", (
         f"material.permeability={k}", f"discretisation.nx={nx}", f"discretisation.ny={ny}",
         "time.steps=1", f"time.end={dt!r}", f"efg.weight_u={wu}", f"efg.weight_p={wp}",
         f"efg.scale_u={scale}", f"efg.scale_p={scale}"))
@@ -225,7 +225,7 @@ def stabilisation_factors(kinds=("perturbation", "projection"), factors=(1, 2, 4
                                   f"time.end={_scaled_step(base, ny)!r}",
                                   *o)) for nx, ny in grids]
         specs.append(("terzaghi", ("discretisation.nx=5", "discretisation.ny=41", *o)))
-        *columns, terzaghi = _results(specs)
+        *columns, terzaghi = solved(specs)
         test = infsup.measure(["efg"], boundaries=["dirichlet"], overrides=o)
         fit = infsup.slopes(test).iloc[0]
         rows.append({"stabilisation": kind, "factor": factor,
@@ -285,7 +285,7 @@ def quadrature_orders(orders=(2, 4, 6), combinations=COMBINATIONS):
         specs += [("soil-column", ("material.permeability=0.0", *column, *o)),
                   ("soil-column", ("material.permeability=1e-05", *column, *o)),
                   ("terzaghi", ("discretisation.nx=5", "discretisation.ny=41", *o))]
-    results = iter(_results(specs))
+    results = iter(solved(specs))
     rows = []
     for (label, (wu, _)), order in settings:
         undrained, seeping, terzaghi = next(results), next(results), next(results)
@@ -334,7 +334,7 @@ def column_stability(permeabilities=(0.0, 1e-5), grids=((3, 21), (5, 41), (9, 81
                                       f"discretisation.ny={ny}", "time.steps=1",
                                       f"time.end={dt!r}", *extra), method))
     rows = []
-    for (k, (nx, ny), (label, _)), result in zip(settings, _results(specs)):
+    for (k, (nx, ny), (label, _)), result in zip(settings, solved(specs)):
         rows.append({"permeability": k, "nodes": f"{nx}x{ny}", "h": result.case.spacing[1],
                      "dt": float(result.case.times()[1]), "method": label,
                      **_pollution(result)})
@@ -354,7 +354,7 @@ def column_ratios(ratios=(3, 30, 300), methods=STABILITY_METHODS):
     base = load_case("soil-column")
     dts = [float(base.times()[1] * stability_number(base) / ratio) for ratio in ratios]
     settings = list(itertools.product(zip(ratios, dts), methods.items()))
-    results = _results([("soil-column", (f"time.end={dt!r}", "time.steps=1", *extra),
+    results = solved([("soil-column", (f"time.end={dt!r}", "time.steps=1", *extra),
                          method) for (_, dt), (_, (method, extra)) in settings])
     rows = []
     for ((ratio, dt), (label, _)), result in zip(settings, results):
@@ -376,7 +376,7 @@ def column_skeletons(methods=STABILITY_METHODS, permeabilities=(0.0, 1e-5), grid
     nx, ny = grid
     skeletons = {"Cam-clay": (), "elastic": ("material.model=elastic",)}
     settings = list(itertools.product(permeabilities, skeletons.items(), methods.items()))
-    results = _results([("soil-column", (
+    results = solved([("soil-column", (
         f"material.permeability={k}", f"discretisation.nx={nx}", f"discretisation.ny={ny}",
         "time.steps=1", f"time.end={dt!r}", *skeleton, *extra), method)
         for k, (_, skeleton), (_, (method, extra)) in settings])
@@ -399,7 +399,7 @@ def fem_terzaghi(methods=FEM_METHODS, moose=None):
     """
     steps = {"moose": (), "dt<=0.01": ("time.dt_max=0.01", "time.end=2.0")}
     settings = list(itertools.product(steps, methods))
-    results = _results([("terzaghi", steps[label], method) for label, method in settings])
+    results = solved([("terzaghi", steps[label], method) for label, method in settings])
     rows = []
     for (label, method), result in zip(settings, results):
         errors = terzaghi_errors(result)
@@ -414,7 +414,7 @@ def fem_terzaghi(methods=FEM_METHODS, moose=None):
     return pd.DataFrame(rows)
 
 
-def _results(specs):
+def solved(specs):
     """Results of ``(case, overrides[, method])`` runs (method default ``efg``) through
     the parallel, cached runner.
 
@@ -443,7 +443,7 @@ def stability_number(case):
 
 def consolidation():
     """Terzaghi (5 x 41 nodes) and Mandel errors of the EFG solver (default settings)."""
-    terzaghi, mandel = _results([("terzaghi", ("discretisation.nx=5", "discretisation.ny=41")),
+    terzaghi, mandel = solved([("terzaghi", ("discretisation.nx=5", "discretisation.ny=41")),
                                  ("mandel", ())])
     terzaghi, mandel = terzaghi_errors(terzaghi), mandel_errors(mandel)
     rows = [("terzaghi", f"max abs(p - p_exact) / p0, {w}", v)
@@ -471,7 +471,7 @@ def column_profiles(runs=COLUMN_RUNS):
     """
     from soil.analytical import terzaghi
 
-    results = _results([("soil-column", ("time.end=40.0",) + overrides, method)
+    results = solved([("soil-column", ("time.end=40.0",) + overrides, method)
                         for method, overrides in runs.values()])
     frames = []
     for label, result in zip(runs, results):
@@ -500,8 +500,8 @@ def consolidation_histories():
     """
     runs = {"EFG (5 x 41 nodes)": ("efg", ("discretisation.nx=5", "discretisation.ny=41")),
             "fem-q1q1": ("fem-q1q1", ()), "fem-th": ("fem-th", ())}
-    terzaghi_runs = _results([("terzaghi", o, m) for m, o in runs.values()])
-    mandel_runs = _results([("mandel", (), m) for m in ("efg", "fem-th", "fem-q1q1")])
+    terzaghi_runs = solved([("terzaghi", o, m) for m, o in runs.values()])
+    mandel_runs = solved([("mandel", (), m) for m in ("efg", "fem-th", "fem-q1q1")])
     frames = []
     for label, result in zip(runs, terzaghi_runs):
         case, h = result.case, result.history

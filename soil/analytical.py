@@ -218,3 +218,58 @@ def undrained_strength(clay):
 #: Prandtl's bearing capacity factor of a weightless Tresca soil: the limit pressure
 #: under a rigid strip footing, rough or smooth, is ``PRANDTL x s_u``.
 PRANDTL = 2 + np.pi
+
+
+def flamant_settlement(force, G, nu, ratio):
+    """Extra settlement of a line load when the elastic body under it grows ``ratio``-fold
+    [m]: ``force (1 - nu) ln(ratio) / (pi G)``.
+
+    Flamant's line load ``force`` [kN/m] on an elastic half-plane in plane strain moves
+    the surface by ``-(force (1 - nu) / (pi G)) ln r + C`` at distance r; C is fixed
+    where the body is held, so a footing's settlement relative to a base at depth D
+    grows as ``ln D`` without bound. Doubling a domain whose far field is elastic adds
+    ``force (1 - nu) ln 2 / (pi G)`` to the settlement at a given load, whatever happens
+    near the footing.
+
+    Parameters
+    ----------
+    force : float or ndarray
+        Line load [kN/m per unit thickness], the whole footing's (both symmetry halves).
+    G, nu : float
+        Shear modulus [kPa] and Poisson's ratio of the far field.
+    ratio : float
+        Size of the larger domain over the smaller one.
+
+    Examples
+    --------
+    >>> round(float(flamant_settlement(6.69, 51.6, 0.333, 2.0)), 5)
+    0.01908
+    """
+    return np.asarray(force) * (1 - nu) * np.log(ratio) / (np.pi * G)
+
+
+def undrained_poisson(material, fluid):
+    """Undrained Poisson's ratio of a skeleton with its pore fluid, at the initial state:
+    ``(3 K_u - 2 G) / (2 (3 K_u + G))`` with ``K_u = K + alpha^2 / S`` (1/2 when the
+    constituents are incompressible, S = 0).
+
+    Parameters
+    ----------
+    material : soil.material.Material
+    fluid : soil.case.Fluid
+        ``biot_alpha`` and ``storage`` S [1/kPa].
+
+    Examples
+    --------
+    >>> from soil.elastic import LinearElastic
+    >>> from soil.case import Fluid
+    >>> undrained_poisson(LinearElastic(E=100.0, nu=0.25), Fluid(storage=0.0))
+    0.5
+    >>> round(undrained_poisson(LinearElastic(E=100.0, nu=0.25), Fluid(storage=1e9)), 6)
+    0.25
+    """
+    K, G = (float(m) for m in material.moduli())
+    if fluid.storage == 0:
+        return 0.5
+    Ku = K + fluid.biot_alpha**2 / fluid.storage
+    return (3 * Ku - 2 * G) / (2 * (3 * Ku + G))

@@ -8,6 +8,12 @@ EFG on the background cells it integrates on.
 
 import numpy as np
 
+#: Fraction of its undeformed smallest angle below which an element counts as distorted,
+#: and an FEM mesh as no longer to be trusted: a stated threshold, not a measured one
+#: (45 to 15 degrees for the triangles of a regular grid; mesh generators that guarantee
+#: quality, Shewchuk's Triangle, keep every angle above 20 to 33 degrees). Relative to
+#: each element's own start, so that a grid of long cells by design is not distorted.
+DISTORTED = 1 / 3
 #: Quality of the right isosceles triangle, ``4 sqrt(3) (1/2) / (1 + 1 + 2)``: a square's
 #: corner triangles; it scales a quadrilateral's corner values so that a square is 1.
 RIGHT_ISOSCELES = np.sqrt(3) / 2

@@ -40,10 +40,10 @@ def test_the_projection_removes_most_of_it_on_the_finer_grid(undrained):
 def test_stabilisation_keeps_terzaghi_and_mandel_within_their_bounds(kind):
     """The same bounds as the unstabilised solver's tests (tests/test_efg_solver.py)."""
     from comparisons.metrics import mandel_errors, terzaghi_errors
-    from comparisons.verification import _results
+    from comparisons.verification import solved
 
     stab = f"efg.stabilisation={kind}"
-    terzaghi, mandel = _results([("terzaghi", ("discretisation.nx=5",
+    terzaghi, mandel = solved([("terzaghi", ("discretisation.nx=5",
                                                "discretisation.ny=41", stab)),
                                  ("mandel", (stab,))])
     t, m = terzaghi_errors(terzaghi), mandel_errors(mandel)

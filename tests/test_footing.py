@@ -222,13 +222,14 @@ def test_segments_round_trip_and_override():
 
 def test_a_run_that_fails_can_stop_at_its_last_converged_level():
     """``time.on_failure = "stop"``: the fem-th footing (B = 2 m, so that its edge is a
-    node) on a 6 x 6 grid, pushed to 0.02,
+    node) on a 5 x 5 m layer of 6 x 6 nodes, pushed to 0.02,
     0.2, 2 and 4 m (levels 1, 10, 100, 200 s at 0.02 m/s) fails before 4 m (measured:
     in the step to 2 m); the result keeps every level before the failure and says why.
     With the default ``error`` the same run raises."""
     from soil.errors import ConvergenceError
 
-    base = ["discretisation.nx=6", "discretisation.ny=6", "boundary.top.footing.to=1.0",
+    base = ["geometry.width=5", "geometry.height=5", "discretisation.nx=6",
+            "discretisation.ny=6", "boundary.top.footing.to=1.0",
             "time.dt0=1", "time.growth=10",
             "time.dt_max=100", "time.end=200", "boundary.top.footing.settlement_rate=0.02"]
     with pytest.raises(ConvergenceError):
@@ -243,16 +244,43 @@ def test_a_run_that_fails_can_stop_at_its_last_converged_level():
     assert np.isfinite(result.history["pressure@footing"]).all()
 
 
-def test_taylor_hood_meets_prandtl_at_a_tenth_of_the_width():
-    """The built-in strip footing on 11 x 11 nodes: fem-th's mean contact pressure at a
-    settlement of 0.1 B is Prandtl's (2 + pi) s_u within 5 % (measured 1.012; 0.956 on
-    21 x 21 and 0.943 on 31 x 31 nodes, `make report`)."""
+def test_taylor_hood_time_step_error_at_a_tenth_of_the_width_is_small():
+    """The built-in footing with 2 spacings per B at the footing (11 x 11 nodes), pushed
+    to 0.1 B in 10 and in 20 steps: fem-th's pressure at 0.1 B moves by under 0.5 %
+    (measured 0.20 %; 0.92 of Prandtl's pressure). EFG's moves by 11 % on the same
+    nodes and steps (1.04, 0.98, 0.87 of Prandtl's in 5, 10, 20 steps; `make report`
+    measures it on the built-in nodes): that is a finding of the report, not asserted."""
     from comparisons.footing import width
-    from soil.analytical import PRANDTL, undrained_strength
+    from comparisons.footing_grids import refined
 
-    case = load_case("strip-footing", ["discretisation.nx=11", "discretisation.ny=11",
-                                       "time.end=10", "time.steps=20"])
-    h = fem_solve(case, "fem-th", progress=False).history
-    B = width(case)
-    p = np.interp(0.1 * B, h["settlement@footing"], h["pressure@footing"])
-    assert p / (PRANDTL * undrained_strength(case.material())) == pytest.approx(1, abs=0.05)
+    p = []
+    for steps in (10, 20):
+        case = load_case("strip-footing", [*refined(2), "time.end=10", f"time.steps={steps}"])
+        h = fem_solve(case, "fem-th", progress=False).history
+        p.append(np.interp(0.1 * width(case), h["settlement@footing"], h["pressure@footing"]))
+    assert p[1] == pytest.approx(p[0], rel=5e-3)
+
+
+@pytest.mark.parametrize("method", ("fem-th", "fem-p1p1-stab"))
+def test_undrained_elastic_footing_settles_as_flamant_per_doubling(method):
+    """A rigid smooth footing on an undrained linear elastic layer (the built-in footing,
+    the skeleton elastic with Table 1's initial moduli) on square domains of 5, 10 and
+    20 B: the compliance settlement / (pressure B) grows by Flamant's
+    ``(1 - nu_u) ln 2 / (pi G)`` per doubling, nu_u = 1/2 (measured for fem-th 1.0 % and
+    0.3 % below it, fem-p1p1-stab 3.2 % and 1.5 %; with the drained nu = 0.333 it would be
+    33 % larger)."""
+    from comparisons.footing_grids import growing
+    from soil.analytical import flamant_settlement, undrained_poisson
+
+    compliance = []
+    for domain in (5.0, 10.0, 20.0):
+        case = load_case("strip-footing", [*growing(domain, core=4), "material.model=elastic",
+                                           "boundary.top.footing.settlement_rate=1e-5",
+                                           "time.end=1", "time.steps=1"])
+        h = fem_solve(case, method, progress=False).history
+        compliance.append(h["settlement@footing"].iloc[-1] / h["pressure@footing"].iloc[-1])
+    clay = case.material()
+    nu_u = undrained_poisson(clay, case.fluid)
+    assert nu_u == 0.5
+    expected = flamant_settlement(1.0, clay.moduli()[1], nu_u, 2.0)
+    assert np.allclose(np.diff(compliance), expected, rtol=0.05)
