@@ -156,7 +156,7 @@ def curves(study):
         One row per step: ``method, density, nodes, strain`` (axial), ``pressure`` (mean
         platen pressure, ``pressure@platen``, over p'0), the columns of :func:`bands`, and
         per run ``run_time`` [s], ``iterations`` (Newton, this step) and ``stopped``
-        (empty, or where and why the run ended early).
+        (True where a step failed after every halving, ``time.on_failure = "stop"``).
     """
     frames = []
     for method, density, variant, result in study:
@@ -168,7 +168,7 @@ def curves(study):
             pressure=h["pressure@platen"].to_numpy() / result.case.material().p0,
             iterations=h.iterations.to_numpy(),
             run_time=result.summary["timings"]["total_s"],
-            stopped=result.summary.get("stopped") or ""))
+            stopped=bool(result.summary.get("stopped"))))
     first = ["method", "density", "nodes", "strain", "pressure"]
     table = pd.concat(frames, ignore_index=True)
     return table[first + [c for c in table.columns if c not in first]]
@@ -210,7 +210,7 @@ def summary(table, predicted):
                      "diagonal": last.diagonal, "predicted": predicted["angle"],
                      "pressure_end": last.pressure, "run_time": last.run_time,
                      "iterations_per_step": run.iterations.mean(),
-                     "stopped": bool(last.stopped)})
+                     "stopped": last.stopped})
     return pd.DataFrame(rows)
 
 
