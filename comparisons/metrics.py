@@ -1,12 +1,17 @@
-"""Metrics shared by tests, sweeps and the report: paths, ERR, pore-pressure stability.
+"""Metrics shared by tests, sweeps and the report: paths, ERR, pore-pressure stability,
+shear bands.
 
 Stresses are compression positive; every metric states its normalisation.
 """
 
+from dataclasses import dataclass
+
 import numpy as np
+from scipy.spatial import Delaunay
 
 from soil.analytical import terzaghi, undrained_pressure
 from soil.driver import run_test
+from soil.errors import require
 
 
 def path_error(history, material, test="undrained-plane-strain"):
@@ -221,3 +226,147 @@ def moose_errors(result, moose):
                                         / p0),
             "settlement_after_0.1": float(np.abs(settle / -moose.zdisp.to_numpy() - 1)[late]
                                           .max())}
+
+
+def shear_strain(reference, current):
+    """Accumulated logarithmic shear strain at the nodes, from their displacements.
+
+    The reference nodes are triangulated (Delaunay; triangles with an area below 1e-12 of
+    the mean dropped); on each triangle the deformation gradient ``F`` of the linear
+    interpolation of the nodal positions gives the principal stretches ``s1 >= s2`` and
+    the largest in-plane shear strain ``gamma = ln(s1/s2)`` (engineering: the difference
+    of the principal logarithmic strains). A node takes the area-weighted mean of its
+    triangles. The same for any method whose snapshot moves the case's nodes (EFG nodes,
+    FEM vertices), whatever its own interpolation.
+
+    Parameters
+    ----------
+    reference, current : array_like, shape (N, 2)
+        Node positions in the initial and the current configuration [m].
+
+    Returns
+    -------
+    gamma : ndarray, shape (N,)
+        Shear strain (dimensionless, >= 0; zero under rigid motion).
+    area : ndarray, shape (N,)
+        Tributary area of each node in the reference configuration (a third of each of
+        its triangles) [m2].
+
+    Examples
+    --------
+    Simple shear ``x += 0.5 y`` of a unit square: ``ln(s1/s2) = 2 asinh(0.25)``.
+
+    >>> X = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [0.5, 0.5]])
+    >>> gamma, area = shear_strain(X, X + 0.5 * X[:, 1:] * [1.0, 0.0])
+    >>> np.allclose(gamma, 2 * np.arcsinh(0.25)), float(area.sum())
+    (True, 1.0)
+    """
+    X, x = np.asarray(reference, float), np.asarray(current, float)
+    triangles = Delaunay(X).simplices
+    dX = (X[triangles[:, 1:]] - X[triangles[:, :1]]).transpose(0, 2, 1)
+    dx = (x[triangles[:, 1:]] - x[triangles[:, :1]]).transpose(0, 2, 1)
+    area = 0.5 * np.abs(np.linalg.det(dX))
+    keep = area > 1e-12 * area.mean()
+    triangles, dX, dx, area = triangles[keep], dX[keep], dx[keep], area[keep]
+    stretches = np.linalg.svd(dx @ np.linalg.inv(dX), compute_uv=False)
+    gamma_t = np.log(stretches[:, 0] / stretches[:, 1])
+    share = np.repeat(area / 3, 3)
+    node_area = np.bincount(triangles.ravel(), share, minlength=len(X))
+    weighted = np.bincount(triangles.ravel(), np.repeat(gamma_t, 3) * share, minlength=len(X))
+    return weighted / node_area, node_area
+
+
+#: A field is localised enough for a band when half its shear strain lies in less than a
+#: quarter of the body (localisation 0.5). A strain growing linearly from zero across
+#: the body, the steepest smooth variation, has sqrt(2) - 1 = 0.41.
+LOCALISED = 0.5
+#: The largest width over length (``sqrt`` of the ratio of the principal moments) of the
+#: straining zone of a band: at least twice as long as wide. A blob is no band.
+SLENDER = 0.5
+
+
+@dataclass(frozen=True)
+class Band:
+    """A nodal shear-strain field rated by :func:`band`.
+
+    Attributes
+    ----------
+    angle : float
+        Inclination of the band to the horizontal (x axis) [degrees, 0 to 90; the band
+        at -a, its mirror image, counts as a]; NaN where there is no band.
+    localisation : float
+        ``1 - 2 v``, ``v`` the smallest fraction of the body's area carrying half the
+        total shear strain: 0 homogeneous, towards 1 for a thin band.
+    aspect : float
+        Width over length of the straining zone, ``sqrt(lambda_2 / lambda_1)`` of its
+        weighted second moments of position: 0 a line, 1 a disc; NaN without one.
+    """
+
+    angle: float
+    localisation: float
+    aspect: float
+
+    @property
+    def found(self):
+        """True where the field is a band (:data:`LOCALISED` and :data:`SLENDER`)."""
+        return bool(np.isfinite(self.angle))
+
+
+def band(points, gamma, area=None):
+    """Inclination of a shear band in a nodal shear-strain field, and how localised it is.
+
+    The straining zone is the smallest set of nodes (largest ``gamma`` first, by area)
+    carrying half the total strain ``sum(area gamma)``; ``gamma_c`` is the strain where
+    it ends. Its nodes, weighted by ``area (gamma - gamma_c)``, have a principal-axis fit
+    (weighted total least squares line): the band's direction is the axis of the larger
+    second moment. The field is a band when :attr:`Band.localisation` is at least
+    :data:`LOCALISED` and :attr:`Band.aspect` at most :data:`SLENDER`.
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 2)
+        Node positions [m] (the configuration the angle is measured in).
+    gamma : array_like, shape (N,)
+        Shear strain at the nodes, >= 0 (:func:`shear_strain`).
+    area : array_like, shape (N,), optional
+        Area each node stands for [m2] (default: equal).
+
+    Returns
+    -------
+    Band
+
+    Examples
+    --------
+    A homogeneous field has no band:
+
+    >>> xy = np.stack(np.meshgrid(np.arange(5.0), np.arange(5.0)), -1).reshape(-1, 2)
+    >>> rated = band(xy, np.full(25, 0.3))
+    >>> rated.found, round(rated.localisation, 12)
+    (False, 0.0)
+    """
+    x = np.asarray(points, float)
+    gamma = np.asarray(gamma, float)
+    area = np.ones(len(x)) if area is None else np.asarray(area, float)
+    require(x.shape == (len(gamma), 2) and area.shape == gamma.shape,
+            f"band: points {x.shape}, gamma {gamma.shape} and area {area.shape} must be "
+            "(N, 2), (N,) and (N,)")
+    order = np.argsort(-gamma, kind="stable")
+    g, a = gamma[order], area[order]
+    strain = np.concatenate([[0.0], np.cumsum(a * g)])
+    if strain[-1] <= 0:
+        return Band(float("nan"), 0.0, float("nan"))
+    strain /= strain[-1]
+    volume = np.concatenate([[0.0], np.cumsum(a)]) / a.sum()
+    localisation = float(1 - 2 * np.interp(0.5, strain, volume))
+    cut = g[np.searchsorted(strain, 0.5) - 1]
+    w = area * np.clip(gamma - cut, 0.0, None)
+    if w.sum() <= 0:
+        return Band(float("nan"), max(localisation, 0.0), float("nan"))
+    centre = w @ x / w.sum()
+    d = x - centre
+    moments, axes = np.linalg.eigh((w[:, None] * d).T @ d / w.sum())
+    aspect = float(np.sqrt(max(moments[0], 0.0) / moments[1]))
+    angle = float(np.degrees(np.arctan2(axes[1, 1], axes[0, 1])) % 180.0)
+    angle = min(angle, 180.0 - angle)
+    found = localisation >= LOCALISED and aspect <= SLENDER
+    return Band(angle if found else float("nan"), localisation, aspect)
