@@ -136,6 +136,24 @@ def nodal(values, initial, triangles):
         return np.where(weight > 0, total / weight, np.nan)
 
 
+def node_areas(initial, triangles):
+    """Tributary area of each node [m2]: a third of each of its triangles' initial
+    areas."""
+    area = _signed_area(np.asarray(initial, float), np.asarray(triangles))
+    return np.bincount(np.asarray(triangles).ravel(), np.repeat(area / 3, 3),
+                       minlength=len(initial))
+
+
+def nodal_strain(first, snapshot):
+    """eps_s at the nodes of a snapshot and their tributary areas, both (N,): the
+    triangles of :func:`triangulation` of the run's first snapshot ``first``, averaged
+    by :func:`nodal`."""
+    initial = np.asarray(first.points, float)
+    triangles = triangulation(first)
+    return (nodal(snapshot_strain(initial, snapshot, triangles), initial, triangles),
+            node_areas(initial, triangles))
+
+
 def snapshot_strain(initial, snapshot, triangles):
     """eps_s of each triangle at one snapshot (:func:`shear_strain` of
     :func:`deformation_gradient`), from the snapshot's node positions."""

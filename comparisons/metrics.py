@@ -7,7 +7,6 @@ Stresses are compression positive; every metric states its normalisation.
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import Delaunay
 
 from soil.analytical import terzaghi, undrained_pressure
 from soil.driver import run_test
@@ -228,54 +227,6 @@ def moose_errors(result, moose):
                                           .max())}
 
 
-def shear_strain(reference, current):
-    """Accumulated logarithmic shear strain at the nodes, from their displacements.
-
-    The reference nodes are triangulated (Delaunay; triangles with an area below 1e-12 of
-    the mean dropped); on each triangle the deformation gradient ``F`` of the linear
-    interpolation of the nodal positions gives the principal stretches ``s1 >= s2`` and
-    the largest in-plane shear strain ``gamma = ln(s1/s2)`` (engineering: the difference
-    of the principal logarithmic strains). A node takes the area-weighted mean of its
-    triangles. The same for any method whose snapshot moves the case's nodes (EFG nodes,
-    FEM vertices), whatever its own interpolation.
-
-    Parameters
-    ----------
-    reference, current : array_like, shape (N, 2)
-        Node positions in the initial and the current configuration [m].
-
-    Returns
-    -------
-    gamma : ndarray, shape (N,)
-        Shear strain (dimensionless, >= 0; zero under rigid motion).
-    area : ndarray, shape (N,)
-        Tributary area of each node in the reference configuration (a third of each of
-        its triangles) [m2].
-
-    Examples
-    --------
-    Simple shear ``x += 0.5 y`` of a unit square: ``ln(s1/s2) = 2 asinh(0.25)``.
-
-    >>> X = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [0.5, 0.5]])
-    >>> gamma, area = shear_strain(X, X + 0.5 * X[:, 1:] * [1.0, 0.0])
-    >>> np.allclose(gamma, 2 * np.arcsinh(0.25)), float(area.sum())
-    (True, 1.0)
-    """
-    X, x = np.asarray(reference, float), np.asarray(current, float)
-    triangles = Delaunay(X).simplices
-    dX = (X[triangles[:, 1:]] - X[triangles[:, :1]]).transpose(0, 2, 1)
-    dx = (x[triangles[:, 1:]] - x[triangles[:, :1]]).transpose(0, 2, 1)
-    area = 0.5 * np.abs(np.linalg.det(dX))
-    keep = area > 1e-12 * area.mean()
-    triangles, dX, dx, area = triangles[keep], dX[keep], dx[keep], area[keep]
-    stretches = np.linalg.svd(dx @ np.linalg.inv(dX), compute_uv=False)
-    gamma_t = np.log(stretches[:, 0] / stretches[:, 1])
-    share = np.repeat(area / 3, 3)
-    node_area = np.bincount(triangles.ravel(), share, minlength=len(X))
-    weighted = np.bincount(triangles.ravel(), np.repeat(gamma_t, 3) * share, minlength=len(X))
-    return weighted / node_area, node_area
-
-
 #: A field is localised enough for a band when half its shear strain lies in less than a
 #: quarter of the body (localisation 0.5). A strain growing linearly from zero across
 #: the body, the steepest smooth variation, has sqrt(2) - 1 = 0.41.
@@ -327,7 +278,7 @@ def band(points, gamma, area=None):
     points : array_like, shape (N, 2)
         Node positions [m] (the configuration the angle is measured in).
     gamma : array_like, shape (N,)
-        Shear strain at the nodes, >= 0 (:func:`shear_strain`).
+        Shear strain at the nodes, >= 0 (:func:`comparisons.deformation.nodal_strain`).
     area : array_like, shape (N,), optional
         Area each node stands for [m2] (default: equal).
 

@@ -8,8 +8,9 @@ import numpy as np
 from tqdm import tqdm
 
 from comparisons import (figures, footing, footing_consolidation, footing_domain,
-                         footing_pictures, infsup, peers, runner, stability_figures,
-                         stability_report, tables, uniqueness, verification)
+                         footing_pictures, infsup, peers, runner, shearband,
+                         stability_figures, stability_report, tables, uniqueness,
+                         verification)
 
 
 def make_report(root="reports"):
@@ -112,6 +113,7 @@ TASKS = [
     _figure("footing consolidation figure", footing_consolidation.figure,
             "footing_consolidation", "footing consolidation curves"),
     *footing_pictures.TASKS,
+    *shearband.TASKS,
     _figure("consolidation figure", figures.consolidation, "consolidation",
             "terzaghi histories", "mandel histories"),
 ]
@@ -411,6 +413,7 @@ def markdown(data):
         *footing_domain.section(data["footing domain"]),
         *footing_consolidation.section(data["footing consolidation"]),
         *footing_pictures.section(data),
+        *shearband.section(data),
         *_verdicts(uc, data["bifurcation"].set_index("run"), data["infsup slopes"],
                    data["column stability"], t2, ec, ft, data["footing"]),
         "## Where we differ from the paper",

@@ -4,7 +4,7 @@ band the loss of ellipticity predicts, and the load-displacement curves.
 The built-in ``rough-compression`` case (the unconfined-compression quarter specimen with
 its top platen rough, undrained, to 20 % axial strain) is run by EFG, fem-th and
 fem-p1p1-stab at two node densities (:data:`DENSITIES`). At each output step the nodes'
-accumulated shear strain (:func:`comparisons.metrics.shear_strain`, the same for every
+shear strain (:func:`comparisons.deformation.nodal_strain`, the same for every
 method) is rated by :func:`comparisons.metrics.band`: the band's inclination to the
 horizontal in the current configuration, or "no band". The prediction is Rudnicki and
 Rice's loss of ellipticity along the driver's homogeneous undrained path
@@ -21,7 +21,8 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from comparisons import runner, tables  # noqa: E402
-from comparisons.metrics import band, shear_strain  # noqa: E402
+from comparisons.deformation import nodal_strain  # noqa: E402
+from comparisons.metrics import band  # noqa: E402
 from comparisons.uniqueness import continuum_onset, solvers  # noqa: E402
 from soil.bifurcation import onset  # noqa: E402
 from soil.driver import continuum_path  # noqa: E402
@@ -137,7 +138,7 @@ def bands(result):
     corner = np.argmax(X.sum(1))
     rows = []
     for snap, strain in zip(result.snapshots[1:], result.history.eps_a):
-        gamma, area = shear_strain(X, snap.points)
+        gamma, area = nodal_strain(result.snapshots[0], snap)
         rated = band(snap.points, gamma, area)
         edge = snap.points[corner] - snap.points[np.argmin(X.sum(1))]
         rows.append({"strain": strain, "angle": rated.angle,
@@ -274,7 +275,7 @@ def figure(study, table, predicted, path):
            title="Rough platen: load-displacement")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    vmax = max(np.percentile(shear_strain(r.case.nodes(), r.snapshots[-1].points)[0], 99)
+    vmax = max(np.nanpercentile(nodal_strain(r.snapshots[0], r.snapshots[-1])[0], 99)
                for _, _, r in own)
     for method, density, result in own:
         ax = fig.add_subplot(grid[densities.index(density), 1 + methods.index(method)])
@@ -292,7 +293,7 @@ def figure(study, table, predicted, path):
                ylim=(-0.1, 4.1))
         ax.legend(fontsize=7, loc="upper right")
     fig.colorbar(image, ax=fig.axes[1:], shrink=0.8, extend="max",
-                 label="accumulated shear strain ln(s1/s2)")
+                 label="shear strain eps_s = sqrt(2/3 e':e'), Hencky")
     fig.savefig(path, dpi=130)
     plt.close(fig)
     return path
@@ -302,7 +303,7 @@ def _configuration(ax, result, vmax):
     """The last configuration: FEM's mesh (its elements' edges) or EFG's nodes, the nodal
     shear strain in colour."""
     snap = result.snapshots[-1]
-    gamma, _ = shear_strain(result.case.nodes(), snap.points)
+    gamma, _ = nodal_strain(result.snapshots[0], snap)
     x, y = snap.points.T
     if snap.cells:
         triangles = snap.cells[0][1][:, :3]
@@ -362,8 +363,9 @@ def section(data):
         "The unconfined-compression quarter specimen with a rough top platen (ux fixed), "
         "undrained, to 20 % axial strain (`soilwater run rough-compression --method "
         "METHOD`), on the paper's 111 nodes and on 413 (twice the nodes per side). The "
-        "band is rated from each run's nodal shear strain ln(s1/s2) (from the node "
-        "displacements, the same for every method): the inclination to the horizontal "
+        "band is rated from each run's nodal shear strain eps_s (the Hencky strain's "
+        "deviatoric invariant from the node displacements, as in the footing pictures, "
+        "the same for every method): the inclination to the horizontal "
         "(current configuration) of the principal axis of the smallest zone carrying "
         "half the shear strain, where the field is localised (half the strain in less "
         "than a quarter of the body: localisation >= 0.5) and the zone slender (at most "

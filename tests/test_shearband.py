@@ -4,7 +4,8 @@ rough-platen runs (comparisons.metrics.band, comparisons.shearband)."""
 import numpy as np
 import pytest
 
-from comparisons.metrics import LOCALISED, band, shear_strain
+from comparisons.deformation import nodal_strain
+from comparisons.metrics import LOCALISED, band
 from comparisons.shearband import CASE, prediction
 from comparisons.runner import solver
 from soil.problems import load_case
@@ -76,17 +77,6 @@ def test_a_concentration_that_is_not_slender_is_no_band(centre, size):
     assert rated.aspect > 0.9 and not rated.found
 
 
-def test_shear_strain_of_homogeneous_deformations():
-    """Pure shear by stretches e^a and e^-a, rotated: ln(s1/s2) = 2a at every node; a
-    rigid rotation strains nothing."""
-    a, turn = 0.1, np.radians(30)
-    R = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
-    gamma, area = shear_strain(XY, XY @ (R @ np.diag([np.exp(a), np.exp(-a)])).T)
-    np.testing.assert_allclose(gamma, 2 * a, rtol=1e-12)
-    assert area.sum() == pytest.approx(12.0)
-    np.testing.assert_allclose(shear_strain(XY, XY @ R.T)[0], 0.0, atol=1e-12)
-
-
 def test_the_prediction_is_the_documented_band():
     """The driver's undrained plane-strain path loses ellipticity at 7.98 % axial strain
     for a band normal inclined 45.7 degrees (REPORT.md): a band inclined 44.3."""
@@ -107,7 +97,7 @@ def test_a_rough_platen_strains_the_specimen_unevenly(method):
     fields = {}
     for name in ("unconfined-compression", CASE):
         result = solver(method)(load_case(name, few), progress=False)
-        gamma, area = shear_strain(result.case.nodes(), result.snapshots[-1].points)
+        gamma, area = nodal_strain(result.snapshots[0], result.snapshots[-1])
         fields[name] = (gamma.max() - gamma.min()) / np.average(gamma, weights=area)
     assert fields["unconfined-compression"] < 1e-6
     assert fields[CASE] > 0.5
