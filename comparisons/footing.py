@@ -77,7 +77,9 @@ def curves(study=None):
         (mean contact pressure over ``(2 + pi) s_u``), ``min_angle`` [degrees] and
         ``min_quality`` of the worst cell (FEM elements, EFG background cells),
         ``distortion`` (the smallest ratio of a triangle's smallest angle to its
-        undeformed one, :func:`distortion`), ``iterations``, ``substeps``, and per run
+        undeformed one, :func:`distortion`), ``min_rcond`` (EFG's support-coverage check:
+        the smallest reciprocal condition number of its MLS moment matrices; NaN for
+        FEM), ``iterations``, ``substeps``, and per run
         ``run_time`` [s] and ``reached`` (the last converged settlement over B; a run
         that stops early is kept up to its last converged level).
     """
@@ -94,6 +96,7 @@ def curves(study=None):
             "pressure": h["pressure@footing"].to_numpy() / (PRANDTL * s_u),
             "min_angle": h["min_angle"].to_numpy(), "min_quality": h["min_quality"].to_numpy(),
             "distortion": distortion(result)[1:],
+            "min_rcond": h["min_rcond"].to_numpy() if "min_rcond" in h else np.nan,
             "iterations": h["iterations"].to_numpy(), "substeps": h["substeps"].to_numpy(),
             "run_time": result.summary["timings"]["total_s"],
             "reached": h["settlement@footing"].iloc[-1] / B}))
@@ -122,7 +125,8 @@ def summary(table, within=WITHIN, at=AT, reference=REFERENCE):
         (pressure over ``(2 + pi) s_u``; NaN if not reached), ``error`` (the largest
         ``|p / p_ref - 1|`` from :data:`FROM` to the settlement both reached),
         ``min_angle`` [degrees] (the worst cell over the run: FEM elements, EFG
-        background cells), ``distortion`` (the smallest at the end), ``distorted_at``
+        background cells), ``min_rcond`` (EFG, the smallest over the run),
+        ``distortion`` (the smallest at the end), ``distorted_at``
         (the first settlement over B with a triangle below :data:`DISTORTED` of its
         undeformed smallest angle; NaN if none),
         ``run_time`` [s], ``iterations_per_step``, ``cutbacks`` (levels that needed a
@@ -141,6 +145,7 @@ def summary(table, within=WITHIN, at=AT, reference=REFERENCE):
                      "within_at": s[close[0]] if close.size else np.nan,
                      f"at_{at:g}B": _at(s, p, at), "at_0.5B": _at(s, p, 0.5),
                      "error": error.max(initial=0.0), "min_angle": run.min_angle.min(),
+                     "min_rcond": run.min_rcond.min(),
                      "distortion": run.distortion.iloc[-1],
                      "distorted_at": s[distorted[0]] if distorted.size else np.nan,
                      "run_time": run.run_time.iloc[0],
@@ -230,7 +235,9 @@ def section(summary):
         f"{by.loc[REFERENCE[0]].index[-1]} nodes) from {FROM:g} B on; `min_angle` the "
         "smallest angle of any cell over the run (FEM: its elements; EFG: its background "
         "triangles, rebuilt every step; the grid's far cells, 4 times longer than wide, "
-        "start at 14 degrees); `distortion` the smallest ratio, at the end, of a "
+        "start at 14 degrees); `min_rcond` EFG's support-coverage check, the smallest "
+        "reciprocal condition number of its MLS moment matrices over the run (the solver "
+        "stops below 1e-10); `distortion` the smallest ratio, at the end, of a "
         "triangle's smallest angle to its undeformed one (FEM: its elements; EFG: the "
         "Delaunay triangles of its initial nodes, moved with them, which it does not use) "
         f"and `distorted_at` the first settlement where it falls below {DISTORTED:.2g}; "

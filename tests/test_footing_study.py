@@ -1,0 +1,110 @@
+"""The strip-footing study's tables and verdict (:mod:`comparisons.footing`,
+:mod:`comparisons.footing_domain`, :mod:`comparisons.footing_grids`) on curves made by
+hand, where every number is known; the runs themselves are `make report`'s."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from comparisons import footing, footing_domain
+from comparisons.footing_grids import growing, refined
+from soil.analytical import PRANDTL, undrained_strength
+from soil.problems import load_case
+
+S = np.linspace(0.005, 0.5, 100)
+
+
+def _run(label, core, pressure, reached=0.5, distortion=None, steps=100, method=None):
+    keep = S <= reached + 1e-12
+    return pd.DataFrame({
+        "label": label, "method": method or label.split(",")[0], "core": core,
+        "nodes": f"{5 * core + 1}x{5 * core + 1}", "steps": steps,
+        "settlement": S[keep], "pressure": pressure[keep], "min_angle": 14.0,
+        "min_quality": 0.4, "distortion": (np.ones(len(S)) if distortion is None
+                                           else distortion)[keep],
+        "min_rcond": np.nan, "iterations": 5, "substeps": 1, "run_time": 10.0 * core,
+        "reached": S[keep][-1]})
+
+
+REF = 1.2 * S / (0.11 + S)  # 0.95 of Prandtl's at S = 0.418
+
+
+def test_summary_measures_against_the_reference():
+    """A run 10 % above the reference has the error 0.1; one that stops at 0.3 B has no
+    pressure at 0.5 B; distortion passing a third is dated; Prandtl's band is entered
+    where the curve crosses 0.95."""
+    table = pd.concat([
+        _run("fem-th", 12, REF),
+        _run("efg", 12, 1.1 * REF, distortion=1 - 2 * S),
+        _run("fem-p1p1-stab", 12, REF, reached=0.3)], ignore_index=True)
+    summary = footing.summary(table, reference=("fem-th", 12)).set_index("label")
+    assert summary.loc["fem-th", "error"] == 0
+    assert summary.loc["efg", "error"] == pytest.approx(0.1, rel=1e-9)
+    assert np.isnan(summary.loc["fem-p1p1-stab", "at_0.5B"])
+    assert summary.loc["fem-p1p1-stab", "reached"] == pytest.approx(0.3, abs=0.005)
+    first = S[np.flatnonzero(1 - 2 * S < 1 / 3)[0]]
+    assert summary.loc["efg", "distorted_at"] == first
+    assert np.isnan(summary.loc["fem-th", "distorted_at"])
+    assert summary.loc["fem-th", "within_at"] == pytest.approx(0.42)
+    assert summary.loc["fem-th", "at_0.1B"] == pytest.approx(1.2 * 0.1 / 0.21, rel=1e-3)
+
+
+@pytest.mark.parametrize("efg_reach, efg_factor, expected", [
+    (0.5, 1.3, "refuted"),     # FEM reaches as far, Taylor-Hood is nearer everywhere
+    (0.5, 1.0, "open"),        # as far and as near: nothing settles it
+])
+def test_verdict_follows_the_measures(efg_reach, efg_factor, expected):
+    runs = []
+    for core in (4, 8, 12):
+        runs += [_run("fem-th", core, REF * (1 + 0.01 * (12 - core))),
+                 _run("fem-p1p1-stab", core, REF * 1.05),
+                 _run("efg", core, REF * efg_factor, reached=efg_reach)]
+    runs.append(_run("efg, 400 steps", 4, REF * efg_factor, steps=400, method="efg"))
+    summary = footing.summary(pd.concat(runs, ignore_index=True),
+                              reference=("fem-th", 12))
+    assert footing.verdict(summary)[0] == expected
+
+
+def test_verdict_supports_efg_that_goes_further_and_as_near():
+    runs = []
+    for core in (4, 8, 12):
+        runs += [_run("fem-th", core, REF, reached=0.5 if core == 12 else 0.2),
+                 _run("fem-p1p1-stab", core, REF * 1.05, reached=0.2),
+                 _run("efg", core, REF)]
+    summary = footing.summary(pd.concat(runs, ignore_index=True),
+                              reference=("fem-th", 12))
+    assert footing.verdict(summary)[0] == "supported"
+
+
+def test_domain_summary_recovers_a_flamant_shift():
+    """Two curves, the larger domain's shifted right by exactly Flamant's settlement:
+    the measured shift is Flamant's, and nothing is left once shifted back."""
+    case = load_case(footing.CASE)
+    su = undrained_strength(case.material())
+    p = 1.5 * S / (0.15 + S)                                    # over Prandtl's
+    extra = footing_domain.shift(case, p * PRANDTL * su, 2.0)   # m, B = 1 m
+    small = pd.DataFrame({"domain": 10, "nodes": "a", "settlement": S, "pressure": p,
+                          "shifted": S + extra})
+    big = pd.DataFrame({"domain": 20, "nodes": "b", "settlement": S + extra, "pressure": p,
+                        "shifted": S + extra})
+    table = pd.concat([small, big], ignore_index=True)
+    summary = footing_domain.summary(table).set_index("domain")
+    flamant = float(footing_domain.shift(case, PRANDTL * su, 2.0))
+    assert summary.loc[20, "shift@1"] == pytest.approx(flamant, rel=1e-3)
+    assert summary.loc[20, "flamant@1"] == pytest.approx(flamant, rel=1e-12)
+    assert summary.loc[20, "shifted_change"] < 1e-3
+
+
+def test_tangent_shear_is_the_elastic_modulus_where_the_clay_cannot_yield():
+    clay = load_case(footing.CASE, ["material.model=elastic"]).material()
+    assert footing_domain.tangent_shear(clay) == clay.moduli()[1]
+
+
+def test_node_families_put_a_node_on_the_footing_edge_and_fill_the_domain():
+    assert load_case(footing.CASE) == load_case(footing.CASE, refined(8))
+    for overrides in (refined(4), refined(12), growing(5.0), growing(40.0)):
+        case = load_case(footing.CASE, overrides)
+        x, y = case.grid_lines()
+        assert 0.5 in np.round(x, 12) and x[-1] == y[-1] == case.geometry.width
+        hx = np.diff(x)
+        assert np.all(hx[1:] / hx[:-1] < 1.2)  # no jump between neighbouring spacings
