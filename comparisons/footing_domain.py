@@ -24,7 +24,7 @@ import pandas as pd  # noqa: E402
 
 from comparisons import tables  # noqa: E402
 from comparisons.footing import CASE, FROM, width  # noqa: E402
-from comparisons.footing_grids import growing  # noqa: E402
+from comparisons.footing_grids import growing, refined  # noqa: E402
 from comparisons.verification import solved  # noqa: E402
 from soil.analytical import (PRANDTL, flamant_settlement, undrained_poisson,  # noqa: E402
                              undrained_strength)
@@ -154,6 +154,26 @@ def figure(table, path):
     return path
 
 
+def _enough(summary, limit=0.02):
+    """The sentence on the smallest domain whose doubling moves the shifted curve by
+    less than ``limit``, and on the built-in case's domain."""
+    domains = summary.domain.to_numpy()
+    change = summary.shifted_change.to_numpy()
+    ok = np.flatnonzero(change[1:] < limit)
+    built = load_case(CASE).geometry.width / width(load_case(CASE))
+    own = np.flatnonzero(domains[:-1] == built)
+    first = (f"Doubling moves the shifted curve by less than {100 * limit:g} % from "
+             f"{domains[ok[0]]:g} B on" if ok.size else
+             f"No doubling measured here moves the shifted curve by less than "
+             f"{100 * limit:g} %")
+    nodes = [len(load_case(CASE, refined(8, domain)).nodes()) for domain in (built,
+                                                                             2 * built)]
+    return first + (f"; the built-in case's {built:g} B moves it by "
+                    f"{100 * change[own[0] + 1]:.2g} % (the price of EFG's cells, at most "
+                    f"4 times longer than wide: {2 * built:g} B take {nodes[1] / nodes[0]:.1f}"
+                    " times the nodes)." if own.size else ".")
+
+
 def section(summary):
     """The report's lines on the domain study."""
     big = summary.iloc[-1]
@@ -180,7 +200,7 @@ def section(summary):
         "Shifted by it to the largest domain, successive curves differ by at most "
         + ", ".join(f"{100 * v:.2g} %" for v in summary.shifted_change[1:])
         + f" between {FROM:g} and {UPTO:g} B: what the boundaries still do to the "
-        "mechanism under the footing.",
+        f"mechanism under the footing. {_enough(summary)}",
         "",
         tables.to_markdown(summary, floatfmt="{:.3g}"),
         "",

@@ -6,9 +6,9 @@ Both families have equal spacings of ``B / core`` within :data:`CORE` of the foo
 node on the footing's edge (x = B / 2):
 
 * :func:`refined`: the built-in layout (33 outer spacings growing 3.75-fold on a 10 B
-  domain, for ``core = 8``), with the outer spacings scaled with ``core``: a refinement
-  that keeps every cell's aspect within 4, as EFG's isotropic supports (the 8th nearest
-  node) need;
+  domain, for ``core = 8``), refined or on another domain with the outer spacings
+  growing alike: every cell's aspect stays within about 4, as EFG's isotropic supports
+  (the 8th nearest node) need;
 * :func:`growing`: spacings growing by a fixed factor per cell from the core to the far
   edges of any domain, the usual mesh of a boundary-value study; its far cells are long
   and flat at the domain's corners, which FEM bears and EFG's supports do not.
@@ -20,21 +20,31 @@ from scipy.optimize import brentq
 
 #: Side of the square of equal spacings at the footing [m] (the footing's width B).
 CORE = 1.0
-#: Outer spacings per core spacing and their growth (last over first) of :func:`refined`.
-OUTER, OUTER_RATIO = 33 / 8, 3.75
+#: Growth of the outer spacings (last over first) of :func:`refined`.
+OUTER_RATIO = 3.75
 #: Growth of neighbouring spacings in :func:`growing`.
 GROWTH = 1.15
 
 
 def refined(core, domain=10.0):
-    """Overrides of the built-in layout refined to ``core`` spacings per :data:`CORE`.
+    """Overrides of the built-in layout refined to ``core`` spacings per :data:`CORE`:
+    beyond the core, as many spacings as make the first one about ``g`` times the core's
+    and the last :data:`OUTER_RATIO` times the first (``g = OUTER_RATIO^(1/(n - 1))``),
+    so that no cell is more than about 4 times longer than wide, whatever the domain.
 
     Examples
     --------
     >>> refined(8)[2:]
     ('discretisation.x=[[1.0, 8], [10.0, 33, 3.75]]', 'discretisation.y=[[9.0, 33, 0.26666666666666666], [10.0, 8]]')
+    >>> [refined(core)[2].split(", ")[3] for core in (4, 12)]
+    ['16', '50']
     """
-    return _overrides(domain, core, round(OUTER * core), OUTER_RATIO)
+    h, rest, R = CORE / core, domain - CORE, OUTER_RATIO
+
+    def filled(n):
+        g = R ** (1 / (n - 1))
+        return h * g * (R * g - 1) / (g - 1) - rest
+    return _overrides(domain, core, round(brentq(filled, 2, 1e4)), R)
 
 
 def growing(domain, core=8, growth=GROWTH):
