@@ -58,7 +58,8 @@ def convergence(column, T):
     print(f"\nconvergence, settlement [m] at t/T = {FACTORS.tolist()} "
           f"(T = {T:.4g} s, {time.perf_counter() - start:.0f} s)")
     for (cells, per_decade), row in zip(levels, study["settlement"]):
-        print(f"{cells:5d} cells {per_decade:3d}/decade  " + "  ".join(f"{s:.7f}" for s in row))
+        values = "  ".join(f"{s:.7f}" for s in row)
+        print(f"{cells:5d} cells {per_decade:3d}/decade  {values}")
     print("observed order          " + "  ".join(f"{p:9.2f}" for p in study["order"]))
     print("extrapolated            " + "  ".join(f"{s:.7f}" for s in study["extrapolated"]))
     default = study["settlement"][3]

@@ -107,7 +107,7 @@ from soil.errors import ConvergenceError, require
 COMPRESSION_LAWS = ("camclay", "constant-mv")
 PERMEABILITY_LAWS = ("constant", "taylor", "kozeny-carman", "xie-leo")
 STARTS = ("geostatic", "deposited")
-#: TR-BDF2's stage fraction; both stages then share the Newton coefficient ``1 - 1/sqrt 2``.
+#: TR-BDF2's stage fraction; both stages share the Newton coefficient ``1 - 1/sqrt 2``.
 TRBDF2 = 2.0 - np.sqrt(2.0)
 
 
@@ -125,7 +125,8 @@ class Clay:
     mv : float
         Volume compressibility [1/kPa] of ``"constant-mv"``.
     e_ref, sigma_v_ref : float
-        The compression line passes through ``e_ref`` at ``sigma_v_ref`` [kPa].
+        The compression line passes through ``e_ref`` at ``sigma_v_ref`` [kPa] (defaults:
+        Table 1's lambda, kappa and e0 at p'0).
     permeability : float
         k_ref [m/s].
     permeability_law : str
@@ -158,8 +159,8 @@ class Clay:
                 f"compression = {self.compression!r} is unknown: use one of "
                 f"{', '.join(COMPRESSION_LAWS)}")
         if self.compression == "camclay":
-            require(self.lam > self.kappa > 0, f"lambda = {self.lam}, kappa = {self.kappa}: "
-                    "need lambda > kappa > 0")
+            require(self.lam > self.kappa > 0,
+                    f"lambda = {self.lam}, kappa = {self.kappa}: need lambda > kappa > 0")
         else:
             require(self.mv is not None and self.mv > 0,
                     f"mv = {self.mv} must be > 0 [1/kPa] with compression = 'constant-mv'")
@@ -203,7 +204,8 @@ class Clay:
         e_p = self.e_ref - self.lam * np.log(sigma_p / self.sigma_v_ref)
         virgin = e <= e_p
         slope = np.where(virgin, self.lam, self.kappa)
-        sigma = np.where(virgin, self.virgin_stress(e), sigma_p * np.exp((e_p - e) / self.kappa))
+        swelling = sigma_p * np.exp((e_p - e) / self.kappa)
+        sigma = np.where(virgin, self.virgin_stress(e), swelling)
         return sigma, -sigma / slope
 
     def permeability_of(self, e):
@@ -281,7 +283,8 @@ class Column:
         q = np.concatenate([[self.surcharge], table[:, 1]])
         if self.start == "deposited":
             require(self.e_deposited is not None and self.e_deposited > 0,
-                    f"e_deposited = {self.e_deposited} must be > 0 with start = 'deposited'")
+                    f"e_deposited = {self.e_deposited} must be > 0 with "
+                    "start = 'deposited'")
             require(self.ocr == 1, f"ocr = {self.ocr}: a deposited layer is normally "
                     "consolidated (ocr = 1)")
         elif self.clay.compression == "camclay":
@@ -291,7 +294,9 @@ class Column:
     @property
     def buoyant_weight(self):
         """``gamma' = (Gs - 1) gamma_w`` [kN/m3 of solids], 0 for a weightless layer."""
-        return (self.clay.specific_gravity - 1) * self.clay.gamma_w if self.self_weight else 0.0
+        if not self.self_weight:
+            return 0.0
+        return (self.clay.specific_gravity - 1) * self.clay.gamma_w
 
     def surcharge_at(self, t):
         """The surcharge q(t) [kPa] (``surcharge`` at t <= 0)."""
@@ -364,19 +369,20 @@ class _Discrete:
             def excess_height(Z):
                 self.Z = Z
                 self._grid()
-                return np.sum(1 + self._geostatic(q0, Z)[0]) * self.dz - column.height
+                return np.sum(1 + self._geostatic(q0)[0]) * self.dz - column.height
 
             self.Z = brentq(excess_height, 1e-9 * column.height, column.height,
                             xtol=1e-15 * column.height, rtol=8.9e-16)
             self._grid()
-            self.e0, self.sigma_p = self._geostatic(q0, self.Z)
+            self.e0, self.sigma_p = self._geostatic(q0)
 
     def _grid(self):
         self.dz = self.Z / self.n
         self.zc = (np.arange(self.n) + 0.5) * self.dz
 
-    def _geostatic(self, q0, Z):
-        sigma = q0 + self.gamma * (Z - (np.arange(self.n) + 0.5) * Z / self.n)
+    def _geostatic(self, q0):
+        """Void ratio and pre-consolidation stress of the cells in equilibrium under q0."""
+        sigma = q0 + self.gamma * (self.Z - self.zc)
         sigma_p = self.column.ocr * sigma
         return self.clay.void_ratio(sigma, sigma_p), sigma_p
 
@@ -417,7 +423,7 @@ class _Discrete:
         xi = faces[:-1] + 0.5 * (1 + e) * self.dz
         s = clay.effective_stress(e, sigma_p)[0]
         u = self.top_stress(t) + self.gamma * (self.Z - self.zc) - s
-        hydro = clay.gamma_w * (col.height - xi) if col.self_weight else 0.0 * xi
+        hydro = clay.gamma_w * (col.height - xi) if col.self_weight else np.zeros_like(xi)
         return faces[-1], xi, s, u, u + hydro, clay.permeability_of(e)[0]
 
 
@@ -453,8 +459,8 @@ def solve(column, times, cells=800, steps_per_decade=40, t_first=None, tol=1e-11
     Result
     """
     times = np.atleast_1d(np.asarray(times, dtype=float))
-    require(np.all(times >= 0) and times.max() > 0, f"times = {times.tolist()} must be >= 0 "
-            "with at least one > 0")
+    require(np.all(times >= 0) and times.max() > 0,
+            f"times = {times.tolist()} must be >= 0 with at least one > 0")
     require(cells >= 2, f"cells = {cells} must be >= 2")
     require(steps_per_decade >= 1, f"steps_per_decade = {steps_per_decade} must be >= 1")
     system = _Discrete(column, int(cells))
