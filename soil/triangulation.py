@@ -3,7 +3,8 @@
 One home for the triangulation of a deformed node set: the EFG background cells
 (:func:`efg.quadrature.delaunay_cells`) integrate on it, and the FEM reference re-meshes
 its vertices with it (``fem.remesh = "delaunay"``, :mod:`fem_reference.solver`), where the
-triangles must also :func:`conform` to the boundary.
+triangles must also tile the polygon (:func:`conforms`): :func:`close_boundary` adds the
+triangle behind a boundary edge that is no Delaunay edge when that gap is one triangle.
 """
 
 import numpy as np
@@ -52,6 +53,64 @@ def delaunay_triangles(nodes, boundary):
     return triangles[keep], jac[keep]
 
 
+def close_boundary(triangles, loop, nodes):
+    """The triangles plus the one that closes each boundary edge missing from them, where
+    the gap behind it is a single triangle.
+
+    A boundary edge (a, b) that is no Delaunay edge (another node lies inside every
+    circle through a and b, as at a thin concave corner) is crossed by a Delaunay edge
+    whose triangles lie outside the polygon and are dropped, leaving a gap. When the gap
+    is one triangle (a, b, c), that is, c is joined to both a and b by edges of a single
+    triangle each, that triangle is added: it is the constrained Delaunay triangle of the
+    edge. Larger gaps are left (:func:`conforms` then fails).
+
+    Parameters
+    ----------
+    triangles : ndarray of int, shape (C, 3)
+        Counter-clockwise (:func:`delaunay_triangles`).
+    loop : ndarray of int, shape (K,)
+        The boundary nodes, counter-clockwise.
+    nodes : ndarray, shape (N, 2)
+        Node coordinates [m].
+
+    Returns
+    -------
+    ndarray of int, shape (C + G, 3)
+        Counter-clockwise; G gaps closed.
+
+    Examples
+    --------
+    A block with a footing pushed 1 m into its top, and a node at (1.25, 1.4) next to
+    the steep edge from the surface (1.2, 2) down to the footing's corner (1, 1): that
+    edge is no Delaunay edge.
+
+    >>> nodes = np.array([[0, 0], [2, 0], [2, 2], [1.2, 2], [1, 1], [0, 1], [1.25, 1.4]])
+    >>> loop = np.arange(6)
+    >>> triangles, _ = delaunay_triangles(nodes, nodes[loop])
+    >>> conforms(triangles, loop, 7), conforms(close_boundary(triangles, loop, nodes), loop, 7)
+    (False, True)
+    """
+    n = len(nodes)
+    edges, count = np.unique(_keys(triangles, np.roll(triangles, -1, axis=1), n).ravel(),
+                             return_counts=True)
+    after = np.roll(loop, -1)
+    missing = ~np.isin(_keys(loop, after, n), edges)
+    if not missing.any():
+        return triangles
+    single = edges[count == 1]
+    ends = np.column_stack([single // n, single % n])
+    ends = np.vstack([ends, ends[:, ::-1]])                  # (a, c) both ways
+    b_of = np.full(n, -1)
+    b_of[loop[missing]] = after[missing]
+    a, c = ends[b_of[ends[:, 0]] >= 0].T
+    b = b_of[a]
+    closes = (c != b) & np.isin(_keys(c, b, n), single)
+    new = np.column_stack([a, b, c])[closes]
+    d1, d2 = nodes[new[:, 1]] - nodes[new[:, 0]], nodes[new[:, 2]] - nodes[new[:, 0]]
+    new = new[d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0] > 0]
+    return np.vstack([triangles, new])
+
+
 def conforms(triangles, loop, n):
     """Whether triangles form a conforming triangulation of the polygon ``loop``.
 
@@ -77,11 +136,13 @@ def conforms(triangles, loop, n):
     >>> conforms(np.array([[0, 1, 2]]), np.array([0, 1, 2, 3]), 4)
     False
     """
-    def keys(a, b):
-        return np.minimum(a, b).astype(np.int64) * n + np.maximum(a, b)
-
-    edges = keys(triangles, np.roll(triangles, -1, axis=1)).ravel()
+    edges = _keys(triangles, np.roll(triangles, -1, axis=1), n).ravel()
     unique, count = np.unique(edges, return_counts=True)
-    boundary = np.unique(keys(loop, np.roll(loop, -1)))
+    boundary = np.unique(_keys(loop, np.roll(loop, -1), n))
     return bool(np.unique(triangles).size == n and count.max(initial=0) <= 2
                 and np.array_equal(unique[count == 1], boundary))
+
+
+def _keys(a, b, n):
+    """One integer per undirected edge (a, b) of n nodes."""
+    return np.minimum(a, b).astype(np.int64) * n + np.maximum(a, b)
