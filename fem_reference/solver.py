@@ -42,8 +42,8 @@ boundary DOF sets, stay; Taylor-Hood's midside DOFs are those of the new edges (
 edge keeps its own, the boundary loop being kept), and its predictor there is the mean of
 the edge's ends. The state at the quadrature points (effective stress, every entry of the
 material state, the last stretching) is carried by :func:`fem_reference.transfer.transfer`
-(L2 projection onto the old mesh's vertex basis, limited to the local range, then
-interpolation at the new points), then made admissible
+(kept elements keep theirs; new ones get the L2 projection onto the old mesh's vertex
+basis, limited to the local range, interpolated at their points), then made admissible
 (:meth:`soil.material.Material.admissible`: Cam-clay's p'c raised to put a stress outside
 the yield surface on it; a carried p' <= 0, which no p'c mends, refuses the re-meshing). The carried stress is not in equilibrium on
 the new mesh; the next step's Newton iteration absorbs the imbalance, whose size is
@@ -385,7 +385,7 @@ def _remesh(model, current, t, timings):
         ub, pb = cell_bases(topology.space.moved(vertices), space.pair)
     with timed(timings, "material_s"):
         names = list(current.state)
-        carried = transfer(Shapes.of(old), old.dx, Shapes.of(pb), np.column_stack(
+        carried = transfer(old, pb, np.column_stack(
             [current.stress, current.stretching, *(current.state[k] for k in names)]))
         stress = carried[:, :4]
         try:

@@ -3,8 +3,9 @@
 When the FEM reference re-meshes (``fem.remesh = "delaunay"``, :mod:`fem_reference.solver`)
 the vertices stay where they are, so the displacement and pressure DOFs at the vertices
 keep their values; what lives at the quadrature points (the effective stress, every entry
-of the material state, the last stretching) must be carried to the new points. The
-transfer is
+of the material state, the last stretching) must be carried to the new points. An element
+the re-meshing keeps (the same three vertices) keeps its values: its quadrature points are
+the same points. The new elements receive
 
 1. **recovery**: the L2 projection of each quantity onto the continuous piecewise-linear
    functions of the old mesh (its vertex basis: the pressure basis of every triangle
@@ -34,7 +35,7 @@ vertices the same share of the area (``int N_i``).
 
 import numpy as np
 
-from fem_reference.assembly import block
+from fem_reference.assembly import Shapes, block
 from soil.linear import factorise
 
 
@@ -102,8 +103,29 @@ def interpolate(shapes, vertex_values):
     return values.reshape(-1, vertex_values.shape[1])
 
 
-def transfer(old, old_dx, new, values):
-    """Quadrature values (E Q, F) on the old mesh to the new mesh's points: :func:`recover`
-    with the old vertex basis ``old`` and weights ``old_dx``, then :func:`interpolate`
-    with the new vertex basis ``new``."""
-    return interpolate(new, recover(old, old_dx, values))
+def transfer(old, new, values):
+    """Quadrature values on the old mesh to the new mesh's points.
+
+    Parameters
+    ----------
+    old, new : skfem.CellBasis
+        P1 (vertex) bases of the old and new meshes on the same vertices, with the same
+        quadrature rule; scikit-fem sorts each element's vertex indices, so an element of
+        both meshes has the same quadrature points in both.
+    values : ndarray, shape (E_old Q, F)
+        F quantities at the old quadrature points (element-major).
+
+    Returns
+    -------
+    ndarray, shape (E_new Q, F)
+        Elements of both meshes: their old values; the others: :func:`recover` on the old
+        mesh, then :func:`interpolate` with the new basis.
+    """
+    Q, F = old.dx.shape[1], values.shape[1]
+    carried = interpolate(Shapes.of(new), recover(Shapes.of(old), old.dx, values))
+    n = old.mesh.p.shape[1]
+    key = [np.ravel_multi_index(basis.mesh.t, (n, n, n)) for basis in (old, new)]
+    _, kept_old, kept_new = np.intersect1d(*key, assume_unique=True, return_indices=True)
+    carried = carried.reshape(-1, Q, F)
+    carried[kept_new] = values.reshape(-1, Q, F)[kept_old]
+    return carried.reshape(-1, F)
