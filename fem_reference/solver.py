@@ -45,16 +45,17 @@ material state, the last stretching) is carried by :func:`fem_reference.transfer
 (kept elements keep theirs; new ones get the L2 projection onto the old mesh's vertex
 basis, limited to the local range, interpolated at their points), then made admissible
 (:meth:`soil.material.Material.admissible`: Cam-clay's p'c raised to put a stress outside
-the yield surface on it; a carried p' <= 0, which no p'c mends, refuses the re-meshing). The carried stress is not in equilibrium on
-the new mesh; the next step's Newton iteration absorbs the imbalance, whose size is
-recorded (``remesh_residual``). Nothing changes when the Delaunay triangles are the mesh's
-own. A boundary edge that is no Delaunay edge (at a thin concave corner, such as the
-footing's edge) leaves a gap, closed by :func:`soil.triangulation.close_boundary` when it
-is one triangle; when the triangles still do not tile the boundary polygon
-(:func:`soil.triangulation.conforms`) the old mesh is kept for that step and counted
-(``remesh_refused``), and the next step tries again. Probes are
-material points: at a re-meshing their current position (the old mesh's interpolation
-of the vertex positions) is located in the new mesh.
+the yield surface on it). The carried stress is not in equilibrium on the new mesh; the
+next step's Newton iteration absorbs the imbalance, whose size is recorded
+(``remesh_residual``). Nothing changes when the Delaunay triangles are the mesh's own. A
+boundary edge that is no Delaunay edge (at a thin concave corner, such as the footing's
+edge) leaves a gap, closed by :func:`soil.triangulation.close_boundary` when it is one
+triangle. When the triangles still do not tile the boundary polygon
+(:func:`soil.triangulation.conforms`), or the carried state cannot be made admissible (a
+p' <= 0, which no p'c mends), the old mesh is kept for that step and counted
+(``remesh_refused``); the next step tries again. Probes are material points: at a
+re-meshing their current position (the old mesh's interpolation of the vertex positions)
+is located in the new mesh.
 
 Linear solver: :mod:`soil.linear` (PARDISO when ``pypardiso`` is installed, SuperLU otherwise) on the condensed, unsymmetric
 tangent, reused within a step (modified Newton) while it contracts the residual at least
@@ -103,8 +104,8 @@ class Model:
         space = Space.build(case, method)
         if case.fem.remesh != "never" and space.pair.shape != "triangle":
             raise InputError(f"fem.remesh = {case.fem.remesh!r} re-triangulates the mesh, "
-                             f"--method {method} has quadrilaterals: use fem-th, fem-p1p1 or "
-                             "fem-p1p1-stab, or fem.remesh = \"never\"")
+                             f"--method {method} has quadrilaterals: use fem-th, fem-p1p1 "
+                             "or fem-p1p1-stab, or fem.remesh = \"never\"")
         return cls(case, method, material, space, Scales.of(case, material),
                    case.boundary_loop())
 
@@ -259,7 +260,7 @@ class State:
     uniqueness: float = 0.0  # soil.bifurcation indicator of the last step (if asked for)
     reactions: np.ndarray = None  # (S,) vertical force on the soil per named segment
     remeshes: int = 0        # re-meshings so far
-    refused: int = 0         # re-meshings refused so far (non-conforming triangles)
+    refused: int = 0         # re-meshings refused so far (not conforming, inadmissible)
     remesh_residual: float = 0.0  # scaled equilibrium residual after the last re-meshing
 
 
@@ -291,8 +292,8 @@ def solve(case, method="fem-th", progress=True):
     result = run(case, method, options, _initial_state(model), partial(_step, model),
                  partial(_history_row, model), partial(_snapshot, model),
                  {"dofs": int(2 * space.n_u + space.n_p),
-                  "elements": int(space.mesh0.t.shape[1]), "stabilisation_beta": model.beta},
-                 progress)
+                  "elements": int(space.mesh0.t.shape[1]),
+                  "stabilisation_beta": model.beta}, progress)
     if case.fem.remesh != "never":
         last = result.history.iloc[-1]
         result.summary.update(remeshes=int(last["remeshes"]),
@@ -498,7 +499,8 @@ class _System:
                                      self.domain_tangent())
         reactions = np.array([self.R[dofs].sum() for dofs in self.con.segment_dofs])
         return replace(current, vertices=current.vertices + du, stress=self.stress,
-                       state=self.state, p=x[2 * n_u:], weights=self.disc.dx.ravel() * self.J,
+                       state=self.state, p=x[2 * n_u:],
+                       weights=self.disc.dx.ravel() * self.J,
                        stretching=self.deps / self.dt, velocity=x[:2 * n_u] / self.dt,
                        uniqueness=uniqueness, reactions=reactions)
 

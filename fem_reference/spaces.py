@@ -142,7 +142,8 @@ class Space:
             the function linear along every edge that takes the initial vertex positions
             (:func:`vertex_interpolant`): a boundary DOF keeps its position, so its kind.
         """
-        mesh0 = MeshTri(np.ascontiguousarray(self.mesh0.p), np.ascontiguousarray(triangles.T))
+        mesh0 = MeshTri(np.ascontiguousarray(self.mesh0.p),
+                        np.ascontiguousarray(triangles.T))
         ub, pb = cell_bases(type(mesh0)(np.ascontiguousarray(vertices.T), mesh0.t,
                                         sort_t=False), self.pair)
         doflocs0 = tuple(vertex_interpolant(b, mesh0.facets, mesh0.p.T).T for b in (ub, pb))

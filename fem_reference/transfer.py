@@ -18,19 +18,19 @@ the same points. The new elements receive
 The projection reproduces a field linear in x (given a rule exact for quadratics, as every
 pair's is) and keeps each quantity's integral over the domain (the basis sums to one).
 It is not monotone: next to a steep change, such as the stress at the edge of a footing,
-it overshoots, and unlimited it carried p' < 0 to a footing's corner (measured on the
-strip footing, fem-th, 11 x 11 nodes at 0.985 B, 21 x 21 at 0.735 B). The limiter keeps
-every carried value within the range of its neighbourhood, so a positive quantity (p'c,
-v) stays positive; it leaves a linear field exact at every vertex that lies inside the
-convex hull of its neighbourhood's quadrature points (interior vertices), and caps it at
-a boundary vertex, where a linear field's value lies beyond that range. The volume-
-weighted average of element means that the VTU snapshots show
-(:func:`fem_reference.solver._snapshot`) is monotone too, but not exact for linear fields
-unless a vertex is the centroid of its patch, and it smears a stress concentration: on
-the strip footing (fem-th, 11 x 11 nodes) one re-meshing with it at 0.985 B lowered the
-footing pressure at 1 B by 11 % against 1.2 % with the limited projection.
-The interpolation on the new mesh keeps the integral only where the two meshes give the
-vertices the same share of the area (``int N_i``).
+it overshoots, and unlimited it can carry p' < 0 to the footing's corner, a state no
+Cam-clay p'c makes admissible. The limiter keeps every carried value within the range of
+its neighbourhood, so a positive quantity (p'c, v) stays positive, and so does a stress
+component that is compressive around the vertex (p', a sum of three components, is not
+bounded by the range of p' itself); it leaves a linear
+field exact at every vertex that lies inside the convex hull of its neighbourhood's
+quadrature points (interior vertices), and caps it at a boundary vertex, where a linear
+field's value lies beyond that range. The volume-weighted average of element means that
+the VTU snapshots show (:func:`fem_reference.solver._snapshot`) is monotone too, but
+exact for a linear field only at a vertex that is the area-weighted centroid of its
+elements' centroids, and it smears a stress concentration more. The interpolation on the
+new mesh keeps the integral only where the two meshes give the vertices the same share of
+the area (``int N_i``).
 """
 
 import numpy as np

@@ -87,8 +87,9 @@ def close_boundary(triangles, loop, nodes):
     >>> nodes = np.array([[0, 0], [2, 0], [2, 2], [1.2, 2], [1, 1], [0, 1], [1.25, 1.4]])
     >>> loop = np.arange(6)
     >>> triangles, _ = delaunay_triangles(nodes, nodes[loop])
-    >>> conforms(triangles, loop, 7), conforms(close_boundary(triangles, loop, nodes), loop, 7)
-    (False, True)
+    >>> closed = close_boundary(triangles, loop, nodes)
+    >>> conforms(triangles, loop, 7), conforms(closed, loop, 7), len(closed) - len(triangles)
+    (False, True, 1)
     """
     n = len(nodes)
     edges, count = np.unique(_keys(triangles, np.roll(triangles, -1, axis=1), n).ravel(),

@@ -146,9 +146,10 @@ def test_probes_are_material_points_across_a_re_meshing():
 def test_homogeneous_elastic_compression_re_meshed_every_step_is_the_fixed_mesh_run():
     """Elastic, undrained, frictionless compression of a jittered grid (the stabilised
     pair, whose pore pressure is unique): P1 holds the homogeneous solution on any
-    triangulation and the transfer carries constants exactly, so re-meshing (the structured diagonals become Delaunay triangles, which
-    change again as the specimen shortens) leaves p and q at the fixed mesh's values to
-    within the Newton tolerance (1e-8 of the stress scale; compared at 1e-6)."""
+    triangulation and the transfer carries constants exactly, so re-meshing (the
+    structured diagonals become Delaunay triangles, which change again as the specimen
+    shortens) leaves p, q and the pore pressures at the fixed mesh's values to within
+    the Newton tolerance (1e-8 of the stress scale; compared at 1e-6)."""
     common = ("discretisation.layout=grid", "discretisation.jitter=0.2", "time.end=10",
               "time.steps=10")
     fixed = _run("unconfined-compression", "fem-p1p1-stab", common, elastic=True)
