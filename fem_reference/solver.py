@@ -34,6 +34,29 @@ nodal spacing [m]. Their model has alpha = 1 and no storage; we keep their beta 
 alpha and S (on the Terzaghi column, alpha = 0.6, S = 0.0625, ``alpha^2 h^2 / (4 M)``
 leaves a 10 % first-step overshoot, ``h^2 / (4 M)`` 0.3 %).
 
+Re-meshing (``fem.remesh = "delaunay"``, triangle pairs): after a converged step whose
+worst element has a :func:`soil.quality.cell_quality` below ``fem.remesh_quality``, the
+current vertices are re-triangulated (:func:`soil.triangulation.delaunay_triangles` inside
+the current boundary polygon). The vertices, so the vertex DOFs, their values and the
+boundary DOF sets, stay; Taylor-Hood's midside DOFs are those of the new edges (a boundary
+edge keeps its own, the boundary loop being kept), and its predictor there is the mean of
+the edge's ends. The state at the quadrature points (effective stress, every entry of the
+material state, the last stretching) is carried by :func:`fem_reference.transfer.transfer`
+(kept elements keep theirs; new ones get the L2 projection onto the old mesh's vertex
+basis, limited to the local range, interpolated at their points), then made admissible
+(:meth:`soil.material.Material.admissible`: Cam-clay's p'c raised to put a stress outside
+the yield surface on it). The carried stress is not in equilibrium on the new mesh; the
+next step's Newton iteration absorbs the imbalance, whose size is recorded
+(``remesh_residual``). Nothing changes when the Delaunay triangles are the mesh's own. A
+boundary edge that is no Delaunay edge (at a thin concave corner, such as the footing's
+edge) leaves a gap, closed by :func:`soil.triangulation.close_boundary` when it is one
+triangle. When the triangles still do not tile the boundary polygon
+(:func:`soil.triangulation.conforms`), or the carried state cannot be made admissible (a
+p' <= 0, which no p'c mends), the old mesh is kept for that step and counted
+(``remesh_refused``); the next step tries again. Probes are material points: at a
+re-meshing their current position (the old mesh's interpolation of the vertex positions)
+is located in the new mesh.
+
 Linear solver: :mod:`soil.linear` (PARDISO when ``pypardiso`` is installed, SuperLU otherwise) on the condensed, unsymmetric
 tangent, reused within a step (modified Newton) while it contracts the residual at least
 tenfold per iteration. PARDISO keeps its default ordering with weighted matching here, not
@@ -41,33 +64,36 @@ the node-blocked ordering of the EFG solver, under which the unstable P1/P1 pair
 more Newton iterations.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 
 import numpy as np
 import scipy.sparse as sp
 
 from fem_reference.assembly import Shapes, block
-from fem_reference.spaces import Space, cell_bases
+from fem_reference.spaces import Space, cell_bases, vertex_interpolant
+from fem_reference.transfer import transfer
 from soil import weakform
 from soil.bifurcation import h1_gram, restricted_eigenvalue
 from soil.coupling import Scales, history_row, material_update, newton, run, timed
-from soil.errors import InputError
+from soil.errors import ConvergenceError, InputError
 from soil.kinematics import cauchy_traction, invariants, prescribed_increment
+from soil.quality import cell_quality
 from soil.results import Snapshot
+from soil.triangulation import close_boundary, conforms, delaunay_triangles
 
 
 @dataclass
 class Model:
-    """What stays fixed over a run: case, method, material, space, constraints, scales."""
+    """What stays fixed over a run: case, method, material, initial space, scales, and
+    the boundary loop (vertex indices, counter-clockwise) that re-meshing keeps."""
 
     case: object
     method: str
     material: object
     space: Space
     scales: Scales
-    constraints: object
-    probes: object           # (P, n_p) pressure basis at the probes (reference coords)
+    loop: np.ndarray
 
     @classmethod
     def build(cls, case, method):
@@ -76,11 +102,12 @@ class Model:
                              f" is {case.analysis!r}: use --method efg")
         material = case.material()
         space = Space.build(case, method)
-        _, pb = cell_bases(space.mesh0, space.pair)
-        points = np.array([p.point for p in case.probes]).reshape(-1, 2)
+        if case.fem.remesh != "never" and space.pair.shape != "triangle":
+            raise InputError(f"fem.remesh = {case.fem.remesh!r} re-triangulates the mesh, "
+                             f"--method {method} has quadrilaterals: use fem-th, fem-p1p1 "
+                             "or fem-p1p1-stab, or fem.remesh = \"never\"")
         return cls(case, method, material, space, Scales.of(case, material),
-                   Constraints.build(case, space),
-                   pb.probes(points.T) if len(points) else None)
+                   case.boundary_loop())
 
     @property
     def beta(self):
@@ -137,7 +164,7 @@ class Constraints:
         """The DOF sets from the kinds at each boundary DOF's initial position (edge and
         named segments, :meth:`soil.case.Case.edge_conditions`)."""
         n_u = space.n_u
-        ub, pb = cell_bases(space.mesh0, space.pair)
+        u_locs, p_locs = space.doflocs0
         sets = {"fixed": [], "prescribed": [], "rigid": [], "footing": []}
         component, drained, rates, segment_dofs, unloaded = [], [], [], [], {}
         rate_of = np.array([seg.settlement_rate if seg.footing else 0.0
@@ -145,7 +172,7 @@ class Constraints:
         first = 0
         for name, edge in case.boundary.items():
             dofs = space.u_dofs[name]
-            kind, _, seg = case.edge_conditions(name, ub.doflocs[:, dofs].T)
+            kind, _, seg = case.edge_conditions(name, u_locs[:, dofs].T)
             for f in range(2):
                 for k in sets:
                     pick = dofs[kind[:, f] == k]
@@ -156,7 +183,7 @@ class Constraints:
                         rates.append(rate_of[first + seg[kind[:, f] == k]])
             segment_dofs += [n_u + dofs[seg == j] for j in range(len(edge.segments))]
             pdofs = space.p_dofs[name]
-            _, wet, _ = case.edge_conditions(name, pb.doflocs[:, pdofs].T)
+            _, wet, _ = case.edge_conditions(name, p_locs[:, pdofs].T)
             drained.append(2 * n_u + pdofs[wet])
             facets = space.edge_facets[name]
             mid = space.mesh0.p[:, space.mesh0.facets[:, facets]].mean(axis=1).T
@@ -183,6 +210,42 @@ class Constraints:
 
 
 @dataclass
+class Topology:
+    """A mesh of the run's vertices and what depends on its elements.
+
+    Attributes
+    ----------
+    space : Space
+    constraints : Constraints
+    probes : scipy.sparse matrix, shape (P, n_p), or None
+        Pressure at each probe (a material point) from the pressure DOFs.
+    """
+
+    space: Space
+    constraints: object
+    probes: object
+
+    @classmethod
+    def initial(cls, case, space):
+        """The initial mesh, probes located at their initial positions."""
+        _, pb = cell_bases(space.mesh0, space.pair)
+        points = np.array([p.point for p in case.probes]).reshape(-1, 2)
+        return cls(space, Constraints.build(case, space),
+                   pb.probes(points.T) if len(points) else None)
+
+    def remeshed(self, case, vertices, triangles):
+        """The topology of new triangles (E, 3) on the current ``vertices`` (N, 2) [m]
+        (:meth:`Space.remeshed`); the probes' current positions (this mesh's
+        interpolation of the vertex positions) are located in the new mesh."""
+        space = self.space.remeshed(case, vertices, triangles)
+        probes = None
+        if self.probes is not None:
+            _, pb = cell_bases(space.moved(vertices), space.pair)
+            probes = pb.probes((self.probes @ vertices).T)
+        return Topology(space, Constraints.build(case, space), probes)
+
+
+@dataclass
 class State:
     """What is carried from step to step (quadrature arrays flattened element-major)."""
 
@@ -193,8 +256,12 @@ class State:
     weights: np.ndarray      # (E Q,) current quadrature weights [m2]
     stretching: np.ndarray   # (E Q, 4) stretching of the last step [1/s]
     velocity: np.ndarray     # (2 n_u,) du/dt of the last step [m/s]: the predictor
+    topology: Topology       # the mesh the next step is solved on
     uniqueness: float = 0.0  # soil.bifurcation indicator of the last step (if asked for)
     reactions: np.ndarray = None  # (S,) vertical force on the soil per named segment
+    remeshes: int = 0        # re-meshings so far
+    refused: int = 0         # re-meshings refused so far (not conforming, inadmissible)
+    remesh_residual: float = 0.0  # scaled equilibrium residual after the last re-meshing
 
 
 def solve(case, method="fem-th", progress=True):
@@ -214,18 +281,24 @@ def solve(case, method="fem-th", progress=True):
     ConvergenceError
         A step that still fails after ``MAX_CUTS`` halvings (the message names the time).
     InputError
-        A static case, or a quadrilateral method on a ``grid+centres`` case.
+        A static case, a quadrilateral method on a ``grid+centres`` case or with
+        ``fem.remesh``.
     """
     model = Model.build(case, method)
     space = model.space
     pair = space.pair
     options = {"elements": f"{pair.u_element.__name__}/{pair.p_element.__name__}",
                "intorder": pair.intorder, "stabilised": pair.stabilised}
-    return run(case, method, options, _initial_state(model), partial(_step, model),
-               partial(_history_row, model), partial(_snapshot, model),
-               {"dofs": int(2 * space.n_u + space.n_p),
-                "elements": int(space.mesh0.t.shape[1]), "stabilisation_beta": model.beta},
-               progress)
+    result = run(case, method, options, _initial_state(model), partial(_step, model),
+                 partial(_history_row, model), partial(_snapshot, model),
+                 {"dofs": int(2 * space.n_u + space.n_p),
+                  "elements": int(space.mesh0.t.shape[1]),
+                  "stabilisation_beta": model.beta}, progress)
+    if case.fem.remesh != "never":
+        last = result.history.iloc[-1]
+        result.summary.update(remeshes=int(last["remeshes"]),
+                              remesh_refused=int(last["remesh_refused"]))
+    return result
 
 
 def _initial_state(model):
@@ -237,6 +310,7 @@ def _initial_state(model):
                  p=np.full(space.n_p, float(case.initial_pore_pressure)),
                  weights=ub.dx.ravel(), stretching=np.zeros((n_points, 4)),
                  velocity=(case.loading.L @ ub.doflocs).ravel(),
+                 topology=Topology.initial(case, space),
                  reactions=np.zeros(len(case.boundary.segments())))
 
 
@@ -251,10 +325,10 @@ class _Discretisation:
     external: np.ndarray     # (2 n_u,) boundary forces at t_(n+1) [force per thickness]
 
 
-def _discretise(model, vertices, t1, timings):
-    """Bases on the mesh at ``vertices`` and the boundary forces at ``t1``; phase times
-    added to ``timings``."""
-    space = model.space
+def _discretise(model, topology, vertices, t1, timings):
+    """Bases on the mesh of ``topology`` at ``vertices`` and the boundary forces at
+    ``t1``; phase times added to ``timings``."""
+    space = topology.space
     with timed(timings, "cells_s"):
         mesh = space.moved(vertices)
     with timed(timings, "shape_functions_s"):
@@ -267,7 +341,7 @@ def _discretise(model, vertices, t1, timings):
             fb = space.facet_basis(mesh, name)
             load = cauchy_traction(model.scales.sigma0, np.moveaxis(fb.normals, 0, -1))
             loaded = np.array([edge.ux, edge.uy]) == "free"
-            bare = ~model.constraints.unloaded[name][:, None, None]
+            bare = ~topology.constraints.unloaded[name][:, None, None]
             load = load + bare * loaded * np.asarray(edge.traction, float) * factor
             external += Shapes.of(fb).vector(np.concatenate(
                 [(fb.dx[..., None] * load)[..., None], np.zeros(load.shape + (2,))], -1))
@@ -275,11 +349,81 @@ def _discretise(model, vertices, t1, timings):
 
 
 def _step(model, current, t0, t1, stats):
-    """One step on the mesh at ``current.vertices``: new state, iterations, residual."""
-    disc = _discretise(model, current.vertices, t1, stats["timings"])
+    """One step on the mesh at ``current.vertices``, then the re-meshing if it is due:
+    new state, iterations, residual."""
+    disc = _discretise(model, current.topology, current.vertices, t1, stats["timings"])
     system = _System(model, current, disc, t0, t1, stats["timings"])
     iterations, residual = newton(system, stats)
-    return system.finish(), iterations, residual
+    return _remesh(model, system.finish(), t1, stats["timings"]), iterations, residual
+
+
+def _remesh(model, current, t, timings):
+    """``current`` on the Delaunay triangles of its vertices when ``fem.remesh`` asks for
+    it and its worst element's quality is below ``fem.remesh_quality`` (module
+    docstring); unchanged when those triangles are the mesh's own, and only counted
+    (``refused``) when they do not tile the boundary polygon or the carried state
+    cannot be made admissible.
+
+    The state is carried (:func:`fem_reference.transfer.transfer`) and made admissible;
+    the vertices, pore pressures and vertex velocities stay. ``remesh_residual`` is the
+    scaled equilibrium residual of the new state at ``t`` (:func:`_imbalance`).
+    """
+    settings, space, vertices = model.case.fem, current.topology.space, current.vertices
+    if settings.remesh == "never":
+        return current
+    with timed(timings, "cells_s"):
+        if cell_quality(vertices[space.corners])[1].min() >= settings.remesh_quality:
+            return current
+        triangles, _ = delaunay_triangles(vertices, vertices[model.loop])
+        triangles = close_boundary(triangles, model.loop, vertices)
+        if _same_triangles(triangles, space.corners):
+            return current
+        if not conforms(triangles, model.loop, len(vertices)):
+            return replace(current, refused=current.refused + 1)
+    with timed(timings, "shape_functions_s"):
+        _, old = cell_bases(space.moved(vertices), space.pair)
+        topology = current.topology.remeshed(model.case, vertices, triangles)
+        ub, pb = cell_bases(topology.space.moved(vertices), space.pair)
+    with timed(timings, "material_s"):
+        names = list(current.state)
+        carried = transfer(old, pb, np.column_stack(
+            [current.stress, current.stretching, *(current.state[k] for k in names)]))
+        stress = carried[:, :4]
+        try:
+            state = model.material.admissible(stress, dict(zip(names, carried[:, 8:].T)))
+        except ConvergenceError:
+            return replace(current, refused=current.refused + 1)
+    velocity = current.velocity.reshape(2, -1)[:, :len(vertices)].T
+    new = replace(current, stress=stress, state=state, weights=ub.dx.ravel(),
+                  stretching=carried[:, 4:8], topology=topology,
+                  velocity=vertex_interpolant(ub, topology.space.mesh0.facets,
+                                              velocity).T.ravel(),
+                  remeshes=current.remeshes + 1)
+    new.remesh_residual = _imbalance(model, new, t, timings)
+    return new
+
+
+def _same_triangles(triangles, corners):
+    """Whether two (E, 3) arrays of vertex indices hold the same triangles."""
+    return len(triangles) == len(corners) and np.array_equal(
+        np.unique(np.sort(triangles, axis=1), axis=0), np.unique(np.sort(corners, axis=1),
+                                                                 axis=0))
+
+
+def _imbalance(model, current, t, timings):
+    """The scaled residual (:func:`_norm`, in units of the Newton tolerance's scales) of
+    the state ``current`` on its own mesh at time t with no increment: the equilibrium
+    imbalance of its stress (the continuity rows vanish with no increment and dt = 0)."""
+    topology = current.topology
+    disc = _discretise(model, topology, current.vertices, t, timings)
+    con, n = topology.constraints, len(current.stress)
+    x = np.concatenate([np.zeros(2 * disc.u.n), current.p])
+    R, _ = _residual(model, disc, current, x, current.stress, np.ones(n),
+                     np.broadcast_to(np.eye(2), (n, 2, 2)), 0.0)
+    reduced = con.T.T @ R
+    if len(con.plate):
+        reduced[-1] -= model.case.plate_force(t)
+    return _norm(reduced, con, model.scales.force, model.scales.volume, 0.0)
 
 
 class _System:
@@ -291,8 +435,9 @@ class _System:
     """
 
     def __init__(self, model, current, disc, t0, t1, timings):
-        case, con, n_u = model.case, model.constraints, model.space.n_u
+        case, con, n_u = model.case, current.topology.constraints, disc.u.n
         self.model, self.current, self.disc, self.timings = model, current, disc, timings
+        self.con = con
         self.dt, self.t1, self.n_u = t1 - t0, t1, n_u
         x = np.concatenate([current.velocity * self.dt, current.p])
         x[con.prescribed] = prescribed_increment(
@@ -307,7 +452,7 @@ class _System:
 
     def residual(self):
         """The reduced residual (plus the pin) and its scaled size."""
-        model, disc, con, n_u = self.model, self.disc, self.model.constraints, self.n_u
+        model, disc, con, n_u = self.model, self.disc, self.con, self.n_u
         E, Q = disc.dx.shape
         grads = disc.u.values(self.x[:2 * n_u].reshape(2, n_u))[..., 1:]
         (self.stress, self.state, self.material_tangent, self.J, self.Finv,
@@ -328,18 +473,18 @@ class _System:
 
     def domain_tangent(self):
         """The tangent of the reduced unknowns (essential conditions eliminated)."""
-        T = self.model.constraints.T
+        T = self.con.T
         return T.T @ _tangent(self.model, self.disc, self.stress, self.total,
                               self.material_tangent, self.J, self.Finv, self.dt) @ T
 
     def tangent(self):
         """:meth:`domain_tangent` bordered by the mean-pressure pin, if any."""
-        return _bordered(self.domain_tangent(), self.model.constraints.T.T @ self.c_mean,
+        return _bordered(self.domain_tangent(), self.con.T.T @ self.c_mean,
                          self.model.scales.pin_pressure)
 
     def advance(self, dx):
         """Add a Newton correction of the reduced unknowns (and the multiplier)."""
-        T = self.model.constraints.T
+        T = self.con.T
         self.x += T @ dx[:T.shape[1]]
         if self.model.scales.pin_pressure:
             self.lam += dx[-1]
@@ -350,18 +495,20 @@ class _System:
         du = x[:2 * n_u].reshape(2, n_u)[:, :len(current.vertices)].T
         uniqueness = 0.0
         if self.model.case.diagnostics.uniqueness:
-            uniqueness = _uniqueness(self.model, self.disc, self.domain_tangent())
-        reactions = np.array([self.R[dofs].sum()
-                              for dofs in self.model.constraints.segment_dofs])
-        return State(current.vertices + du, self.stress, self.state, x[2 * n_u:],
-                     self.disc.dx.ravel() * self.J, self.deps / self.dt,
-                     x[:2 * n_u] / self.dt, uniqueness, reactions)
+            uniqueness = _uniqueness(self.model, self.con, self.disc,
+                                     self.domain_tangent())
+        reactions = np.array([self.R[dofs].sum() for dofs in self.con.segment_dofs])
+        return replace(current, vertices=current.vertices + du, stress=self.stress,
+                       state=self.state, p=x[2 * n_u:],
+                       weights=self.disc.dx.ravel() * self.J,
+                       stretching=self.deps / self.dt, velocity=x[:2 * n_u] / self.dt,
+                       uniqueness=uniqueness, reactions=reactions)
 
 
 def _residual(model, disc, current, x, stress, J, Finv, dt):
     """Full residual ``[R_u, R_p]`` and the total stress at the quadrature points
     (:func:`soil.weakform.residual`, scattered with the element bases)."""
-    fluid, n_u = model.case.fluid, model.space.n_u
+    fluid, n_u = model.case.fluid, disc.u.n
     E, Q = disc.dx.shape
     p_vals = disc.p.values(x[2 * n_u:]).reshape(E * Q, 3)
     pn_vals = disc.p.values(current.p).reshape(E * Q, 3)
@@ -386,15 +533,14 @@ def _tangent(model, disc, stress, total, tangent, J, Finv, dt):
                      block(disc.p, disc.p, c[:, :, p, :, p])]], format="csr")
 
 
-def _uniqueness(model, disc, K):
+def _uniqueness(model, con, disc, K):
     """:func:`soil.bifurcation.restricted_eigenvalue` of a step's converged tangent
     (essential conditions eliminated, the plate included) over the initial P-wave modulus:
     the displacement block on the undrained constraint (the free pressure rows), against
     the H1 Gram matrix of the displacement basis (length scale: the body's height)."""
     E, Q = disc.dx.shape
     gram = h1_gram(disc.dx.ravel(), model.case.geometry.height).reshape(E, Q, 2, 3, 2, 3)
-    con = model.constraints
-    u = con.T[:, con.is_u][:2 * model.space.n_u]
+    u = con.T[:, con.is_u][:2 * disc.u.n]
     G = u.T @ block(disc.u, disc.u, gram) @ u
     K = sp.csr_matrix(K)
     value = restricted_eigenvalue(K[con.is_u][:, con.is_u], K[~con.is_u][:, con.is_u], G)
@@ -418,28 +564,36 @@ def _norm(reduced, con, force, volume, pin):
 def _history_row(model, current, t, dt, info):
     """:func:`soil.coupling.history_row` of the quadrature points (weighted by volume);
     ``min_angle`` and ``min_quality`` of the elements on the moved mesh (their corner
-    vertices: the straight-sided cell of a Taylor-Hood or Q2 element)."""
-    case = model.case
+    vertices: the straight-sided cell of a Taylor-Hood or Q2 element), the mesh the next
+    step is solved on; with ``fem.remesh``, ``remeshes`` and ``remesh_refused`` (counts
+    so far) and ``remesh_residual`` (:func:`_imbalance` after the last re-meshing, 0
+    before the first; read it where ``remeshes`` grows)."""
+    case, topology = model.case, current.topology
     top = model.space.mesh0.p[1] > case.geometry.height * (1 - 1e-9)
     probes = ()
-    if model.probes is not None:
-        probes = zip([pr.name for pr in case.probes], model.probes @ current.p)
+    if topology.probes is not None:
+        probes = zip([pr.name for pr in case.probes], topology.probes @ current.p)
     nodes0 = model.space.mesh0.p.T
     segments = [(seg, current.vertices[k], nodes0[k], force,
                  float(current.vertices[k[0], 1] - nodes0[k[0], 1])  # the plate's uy
                  if seg.load_controlled else None)
                 for (_, seg), k, force in zip(case.boundary.segments(), case.segment_nodes(),
                                               current.reactions)]
-    return history_row(case, t, dt, info, current.stress, current.stretching,
-                       current.vertices[top], nodes0[top],
-                       current.weights / current.weights.sum(), probes,
-                       current.uniqueness if case.diagnostics.uniqueness else None,
-                       segments, cells=current.vertices[model.space.corners])
+    row = history_row(case, t, dt, info, current.stress, current.stretching,
+                      current.vertices[top], nodes0[top],
+                      current.weights / current.weights.sum(), probes,
+                      current.uniqueness if case.diagnostics.uniqueness else None,
+                      segments, cells=current.vertices[topology.space.corners])
+    if case.fem.remesh != "never":
+        row.update(remeshes=current.remeshes, remesh_refused=current.refused,
+                   remesh_residual=current.remesh_residual)
+    return row
 
 
 def _snapshot(model, current, t):
-    """Vertex fields with cells: u, p_w, and p', q and state averaged to the vertices."""
-    mesh0 = model.space.mesh0
+    """Vertex fields with the current cells: u, p_w, and p', q and state averaged to the
+    vertices (each vertex: the volume-weighted mean of its elements' means)."""
+    mesh0 = current.topology.space.mesh0
     cells = mesh0.t
     E = cells.shape[1]
     p, q = invariants(current.stress)
@@ -453,4 +607,4 @@ def _snapshot(model, current, t):
         data[name] = np.bincount(cells.T.ravel(), np.repeat(mean, cells.shape[0]),
                                  minlength=mesh0.p.shape[1]) / node_volume
     return Snapshot(t, current.vertices.copy(), data,
-                    cells=[(model.space.cell_type, cells.T.copy())])
+                    cells=[(current.topology.space.cell_type, cells.T.copy())])

@@ -10,11 +10,11 @@ the cells of the structured grid (``grid`` layout only).
 Every element pair uses one Gauss rule for all terms, so the material points (quadrature
 points) of the displacement and the pressure bases coincide; they keep their place in the
 reference element while the mesh moves, which carries the material state from step to
-step without remapping.
+step without remapping. A triangle mesh can be replaced by new triangles on the same
+vertices (:meth:`Space.remeshed`, the re-meshing of :mod:`fem_reference.solver`).
 """
 
 from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 from scipy.spatial import Delaunay
@@ -78,12 +78,14 @@ def initial_mesh(case, method):
 
 @dataclass
 class Space:
-    """Topology, elements and boundary DOF sets of a run, fixed from the initial mesh.
+    """Topology, elements and boundary DOF sets of a mesh on the case's nodes.
 
     Attributes
     ----------
     mesh0 : skfem.Mesh
-        The initial mesh (vertices = case nodes).
+        The mesh's elements on the initial positions of its vertices (the case nodes): the
+        initial mesh, or the elements of a re-meshing, which may be tangled there (only
+        their topology and the initial positions of boundary facets are used).
     pair : Pair
     edge_facets : dict
         Boundary facet indices of each edge name (left, right, bottom, top).
@@ -92,6 +94,14 @@ class Space:
         midside DOFs), from the initial coordinates.
     n_u, n_p : int
         DOFs of one displacement component and of the pressure.
+    corners : ndarray of int, shape (E, 3 or 4)
+        Vertex indices of every element, counter-clockwise where the elements were made
+        (the initial mesh, or the configuration of the re-meshing): scikit-fem sorts each
+        triangle's indices, which leaves half the grid's triangles clockwise;
+        ``vertices[corners]`` are the cells of :func:`soil.quality.cell_quality`.
+    doflocs0 : tuple of ndarray
+        Initial positions (2, n_u) and (2, n_p) [m] of the displacement and pressure
+        DOFs, where the boundary kinds are read (:meth:`soil.case.Case.edge_conditions`).
     """
 
     mesh0: object
@@ -101,17 +111,51 @@ class Space:
     p_dofs: dict
     n_u: int
     n_p: int
+    corners: np.ndarray
+    doflocs0: tuple
 
     @classmethod
     def build(cls, case, method):
+        """The space of the initial mesh (:func:`initial_mesh`)."""
         mesh = initial_mesh(case, method)
-        pair = PAIRS[method]
-        ub, pb = cell_bases(mesh, pair)
-        edge_facets = _edge_facets(mesh, case.geometry)
-        return cls(mesh, pair, edge_facets,
+        ub, pb = cell_bases(mesh, PAIRS[method])
+        return cls._of(case, mesh, PAIRS[method], ub, pb, _counter_clockwise(mesh),
+                       (ub.doflocs, pb.doflocs))
+
+    def remeshed(self, case, vertices, triangles):
+        """The space of new triangles on the same vertices.
+
+        Parameters
+        ----------
+        case : Case
+        vertices : ndarray, shape (N, 2)
+            Current vertex positions [m].
+        triangles : ndarray of int, shape (E, 3)
+            Vertex indices, counter-clockwise on ``vertices``, tiling the current
+            boundary polygon (:func:`soil.triangulation.conforms`).
+
+        Returns
+        -------
+        Space
+            scikit-fem's DOF numbering of the new elements (bases on the current
+            vertices, where the elements are valid); initial DOF positions are those of
+            the function linear along every edge that takes the initial vertex positions
+            (:func:`vertex_interpolant`): a boundary DOF keeps its position, so its kind.
+        """
+        mesh0 = MeshTri(np.ascontiguousarray(self.mesh0.p),
+                        np.ascontiguousarray(triangles.T))
+        ub, pb = cell_bases(type(mesh0)(np.ascontiguousarray(vertices.T), mesh0.t,
+                                        sort_t=False), self.pair)
+        doflocs0 = tuple(vertex_interpolant(b, mesh0.facets, mesh0.p.T).T for b in (ub, pb))
+        return self._of(case, mesh0, self.pair, ub, pb, triangles, doflocs0)
+
+    @classmethod
+    def _of(cls, case, mesh0, pair, ub, pb, corners, doflocs0):
+        edge_facets = _edge_facets(mesh0, case.geometry)
+        return cls(mesh0, pair, edge_facets,
                    {e: ub.get_dofs(f).flatten() for e, f in edge_facets.items()},
                    {e: pb.get_dofs(f).flatten() for e, f in edge_facets.items()},
-                   ub.N, pb.N)
+                   ub.N, pb.N, corners, doflocs0)
 
     def moved(self, vertices):
         """The mesh with the same topology on vertices (N, 2) [m]."""
@@ -123,19 +167,6 @@ class Space:
         return FacetBasis(mesh, self.pair.u_element(), facets=self.edge_facets[edge],
                           intorder=self.pair.intorder)
 
-    @cached_property
-    def corners(self):
-        """Vertex indices of every element (E, 3 or 4), counter-clockwise on the initial
-        mesh: scikit-fem sorts each triangle's indices, which leaves half the grid's
-        triangles clockwise; ``vertices[corners]`` are the cells of
-        :func:`soil.quality.cell_quality`."""
-        t = self.mesh0.t.T.copy()
-        p = self.mesh0.p.T[t]
-        a, b = p[:, 1] - p[:, 0], p[:, -1] - p[:, 0]
-        clockwise = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0] < 0
-        t[clockwise] = t[clockwise, ::-1]
-        return t
-
     @property
     def cell_type(self):
         """VTK cell name of the vertex mesh."""
@@ -146,6 +177,40 @@ def cell_bases(mesh, pair):
     """Scalar displacement and pressure bases on one mesh, with one Gauss rule."""
     return (CellBasis(mesh, pair.u_element(), intorder=pair.intorder),
             CellBasis(mesh, pair.p_element(), intorder=pair.intorder))
+
+
+def vertex_interpolant(basis, facets, values):
+    """DOF values of the function that is linear along every edge and takes ``values``
+    (N, k) at the vertices, for a basis whose DOFs are the vertices and edge midpoints
+    (P1, P2): vertex DOFs take the vertex values, midside DOFs the mean of their edge's
+    two ends. Returns (n, k).
+
+    ``facets`` (2, F) are the mesh's edges (``mesh.facets``), in the basis' numbering.
+
+    Examples
+    --------
+    >>> mesh = MeshTri()
+    >>> basis = CellBasis(mesh, ElementTriP2())
+    >>> np.allclose(vertex_interpolant(basis, mesh.facets, mesh.p.T), basis.doflocs.T)
+    True
+    """
+    values = np.asarray(values, float)
+    out = np.empty((basis.N, values.shape[1]))
+    out[basis.nodal_dofs[0]] = values
+    if basis.facet_dofs.size:
+        out[basis.facet_dofs[0]] = values[facets].mean(axis=0)
+    return out
+
+
+def _counter_clockwise(mesh):
+    """Vertex indices (E, 3 or 4) of the mesh's elements, counter-clockwise on its
+    vertices."""
+    t = mesh.t.T.copy()
+    p = mesh.p.T[t]
+    a, b = p[:, 1] - p[:, 0], p[:, -1] - p[:, 0]
+    clockwise = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0] < 0
+    t[clockwise] = t[clockwise, ::-1]
+    return t
 
 
 def _edge_facets(mesh, geometry):

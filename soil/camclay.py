@@ -137,6 +137,37 @@ class CamClay(Material):
         p, q = invariants(stress)
         return self._f(p, q, state["pc"], 1.0 / state["pc"] ** 2)[0]
 
+    def admissible(self, stress, state):
+        """The state with p'c raised where the stress lies outside the yield surface, to
+        the size that puts it on the surface: ``p'c = p' exp(q / (M p'))`` (original),
+        ``p'c = p' + q^2 / (M^2 p')`` (modified); elsewhere unchanged.
+
+        Raising p'c is plastic compaction without a stress change; the stress itself, an
+        equilibrium quantity, is kept.
+
+        Raises
+        ------
+        ConvergenceError
+            Where p' <= 0: no surface passes through the stress.
+
+        Examples
+        --------
+        >>> clay = CamClay(lam=0.11, kappa=0.04, M=1.42, nu=0.333, e0=0.83, p0=3.0)
+        >>> stress = np.array([[-3.0, -1.0, -2.0, 1.5]])          # p' = 2, q > M p'
+        >>> state = clay.admissible(stress, {"pc": np.array([3.0]), "v": np.array([1.83])})
+        >>> float(state["pc"][0]) > 3.0, abs(float(clay.yield_value(stress, state)[0])) < 1e-12
+        (True, True)
+        """
+        p, q = invariants(stress)
+        if not np.all(p > 0):
+            raise ConvergenceError(f"Cam-clay needs p' > 0 at every point; a carried stress "
+                                   f"has p' = {p.min():.3g}")
+        if self.model == "original":
+            surface = p * np.exp(q / (self.M * p))
+        else:
+            surface = p + q**2 / (self.M**2 * p)
+        return {**state, "pc": np.maximum(state["pc"], surface)}
+
     def _f(self, p, q, pc, scale):
         """Yield function and its derivatives ``(f, f_p, f_q, f_pc, f_pp, f_pq, f_qq, f_ppc)``.
 

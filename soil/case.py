@@ -18,7 +18,7 @@ import numpy as np
 from soil.analytical import exact_solution
 from soil.errors import require
 from soil.materials import material_from_spec
-from soil.settings import EFGSettings
+from soil.settings import EFGSettings, FEMSettings
 
 EDGES = ("left", "right", "bottom", "top")
 KINDS = ("free", "fixed", "prescribed", "rigid", "exact")
@@ -357,7 +357,8 @@ class Case:
     Build it with :func:`soil.problems.load_case` or :func:`soil.validation.case_from_dict`;
     it is immutable, comparable and picklable. ``material_spec`` holds the ``[material]``
     entries other than the fluid keys, as sorted ``(key, value)`` pairs; ``efg`` holds the
-    meshless settings, weights parsed into :class:`soil.settings.Weight` objects.
+    meshless settings, weights parsed into :class:`soil.settings.Weight` objects, and
+    ``fem`` the FEM reference's (:class:`soil.settings.FEMSettings`).
     """
 
     name: str
@@ -375,6 +376,7 @@ class Case:
     exact: tuple[tuple[str, object], ...] = ()
     efg: EFGSettings = field(default_factory=EFGSettings)
     diagnostics: Diagnostics = Diagnostics()
+    fem: FEMSettings = FEMSettings()
 
     def exact_solution(self):
         """``points -> (u, stress)`` of the ``[exact]`` solution, or None (soil.analytical)."""
@@ -502,6 +504,7 @@ class Case:
             "exact": dict(self.exact),
             "diagnostics": asdict(self.diagnostics),
             "efg": self.efg.to_dict(),
+            "fem": self.fem.to_dict(),
         })
 
 

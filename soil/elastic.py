@@ -69,6 +69,10 @@ class LinearElastic(Material):
         """Elastic tangent (4, 4) from Voigt strain ``(xx, yy, zz, 2xy)`` to stress."""
         return self.K * np.outer(IDENTITY, IDENTITY) + 2 * self.G * DEVIATORIC
 
+    def admissible(self, stress, state):
+        """Every stress is admissible: the state unchanged."""
+        return state
+
     def initial_state(self, n, p=None):
         """Isotropic stress ``-p I`` and the (volume-only) state for n points."""
         p = self.p0 if p is None else p

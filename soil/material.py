@@ -36,6 +36,14 @@ class Material(ABC):
         """
 
     @abstractmethod
+    def admissible(self, stress, state):
+        """The state made admissible for the stress: a stress carried to new points (the
+        FEM reference's re-meshing, :mod:`fem_reference.transfer`) may lie outside the
+        yield surface of its carried state, which the return mapping does not allow as
+        a start. Returns the state (dict of (n,) arrays) with the stress (n, 4) on or
+        inside the yield surface."""
+
+    @abstractmethod
     def moduli(self, p=None, v=None):
         """Bulk and shear moduli ``(K, G)`` at mean effective stress p' and specific
         volume v (default: the initial state), in the case's stress unit."""

@@ -118,6 +118,15 @@ Schema (every case has the same one; unknown keys are an error)::
                                       # Pi the mean over each background cell
     stabilisation_factor = 1.0        # multiplies that h^2/(4M) or 1/G, 0 < f <= 1000
 
+    [fem]                             # optional FEM reference settings (defaults shown)
+    remesh = "never"                  # or "delaunay": after a converged step whose worst
+                                      # element's quality (soil.quality.cell_quality)
+                                      # is below remesh_quality, re-triangulate the
+                                      # current vertices (Delaunay inside the current
+                                      # boundary) and transfer the state (triangle
+                                      # pairs: fem-th, fem-p1p1, fem-p1p1-stab)
+    remesh_quality = 0.3              # in (0, 1]; 1 re-triangulates after every step
+
 Boundary kinds of a displacement component:
 
 * ``free``: natural; the edge's traction component acts there.
@@ -198,7 +207,7 @@ import tomllib
 from soil.errors import require
 
 SECTIONS = ("geometry", "discretisation", "material", "initial", "boundary", "loading",
-            "time", "probes", "exact", "diagnostics", "efg")
+            "time", "probes", "exact", "diagnostics", "efg", "fem")
 """The sections of a case, besides the top-level keys ``name``, ``description`` and
 ``analysis``."""
 KEYS = {
@@ -212,6 +221,7 @@ KEYS = {
     "time": ("end", "steps", "dt0", "growth", "dt_max", "on_failure"),
     "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "cells", "order", "penalty",
             "correction", "stabilisation", "stabilisation_factor"),
+    "fem": ("remesh", "remesh_quality"),
 }
 """The keys each section accepts (``edge``: each ``[boundary.<side>]``, which also takes
 named segments as sub-tables; ``segment``: each ``[boundary.<side>.<name>]``). ``[material]``,

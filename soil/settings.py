@@ -1,4 +1,5 @@
-"""Typed method settings of a case: the MLS weight names and the ``[efg]`` settings.
+"""Typed method settings of a case: the MLS weight names, the ``[efg]`` and ``[fem]``
+settings.
 
 A case names an MLS weight by a string; :meth:`Weight.parse` reads it once, when the case
 is loaded, into a :class:`Weight` (a canonical name, an integer kind code and the
@@ -7,7 +8,8 @@ meshless settings. The grammar of the names (:func:`weight_form`: the families, 
 aliases ``Q``, ``E-A``, ``E-B`` and the range :data:`EXP_C` of C) lives here, in
 :mod:`soil`, so that load-time validation and the solver accept exactly the same names
 without :mod:`soil` importing ``efg``; :mod:`efg.weights` evaluates the weights from the
-kind codes :data:`QUARTIC`, :data:`CUBIC` and :data:`EXPONENTIAL`.
+kind codes :data:`QUARTIC`, :data:`CUBIC` and :data:`EXPONENTIAL`. :class:`FEMSettings`
+holds the FEM reference's re-meshing option.
 """
 
 import math
@@ -184,3 +186,38 @@ class EFGSettings:
         """The settings as a plain dict, weights by their canonical names."""
         values = {f.name: getattr(self, f.name) for f in fields(self)}
         return {k: str(v) if isinstance(v, Weight) else v for k, v in values.items()}
+
+
+REMESH = ("never", "delaunay")
+"""Re-meshing of the FEM reference, ``fem.remesh``: never (the initial topology throughout)
+or the Delaunay triangles of the current vertices (:mod:`soil.triangulation`)."""
+REMESH_QUALITY = 0.3
+"""Default ``fem.remesh_quality``: about the :func:`soil.quality.cell_quality` of a triangle
+with a 10 degree corner (a right triangle 0.296) or a 150 degree one (the isosceles
+triangle 0.302), the angles that mesh generators keep their triangles away from; the
+undeformed grid's right isosceles triangles have 0.866."""
+
+
+@dataclass(frozen=True)
+class FEMSettings:
+    """Settings of the FEM reference: re-meshing for large deformation.
+
+    ``remesh`` is ``never`` or ``delaunay``: after every converged step whose worst
+    element has a :func:`soil.quality.cell_quality` below ``remesh_quality``
+    (dimensionless, in (0, 1]; 1 re-triangulates after every step), the current
+    vertices are re-triangulated (Delaunay, inside the current boundary polygon) and the
+    state at the quadrature points is carried over (:mod:`fem_reference.transfer`).
+    Triangle pairs only.
+
+    Examples
+    --------
+    >>> FEMSettings().to_dict()
+    {'remesh': 'never', 'remesh_quality': 0.3}
+    """
+
+    remesh: str = "never"
+    remesh_quality: float = REMESH_QUALITY
+
+    def to_dict(self):
+        """The settings as a plain dict."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}

@@ -21,8 +21,8 @@ from soil.errors import InputError, require
 from soil.materials import FLUID_KEYS, material_from_spec
 from soil.schema import (ASPECTS, GEOMETRIC, GRADINGS, KEYS, LENGTHS, MAX_TRIANGLE_ORDER,
                          SCALES, SECTIONS, expand_displacement)
-from soil.settings import (CELLS, CORRECTIONS, DEFAULT_SCALE, STABILISATIONS, EFGSettings,
-                           Weight)
+from soil.settings import (CELLS, CORRECTIONS, DEFAULT_SCALE, REMESH, STABILISATIONS,
+                           EFGSettings, FEMSettings, Weight)
 
 _RESTRAINED = ("fixed", "prescribed", "exact")
 _CORNERS = (("left", "bottom"), ("left", "top"), ("right", "bottom"), ("right", "top"))
@@ -69,6 +69,7 @@ def case_from_dict(data):
         exact=_exact(_section(data, "exact", {})),
         efg=_efg(_section(data, "efg", {})),
         diagnostics=_diagnostics(_section(data, "diagnostics", {})),
+        fem=_fem(_section(data, "fem", {})),
     )
     _require_aspect(case)
     _require_exact_if_used(case)
@@ -462,6 +463,17 @@ def _efg(table):
             "(it multiplies the stabilisation's coefficient, h^2/(4M) or 1/G; 1 is the "
             "published one)")
     return EFGSettings(**values)
+
+
+def _fem(table):
+    _check_keys(table, KEYS["fem"], "fem")
+    defaults = FEMSettings()
+    quality = _number(table, "remesh_quality", "fem", defaults.remesh_quality)
+    require(0 < quality <= 1, f"fem.remesh_quality = {quality:g} must lie in (0, 1] (the "
+            "worst element's shape quality below which the mesh is re-triangulated: 1 "
+            f"equilateral, 0 degenerate): use e.g. {defaults.remesh_quality:g}")
+    return FEMSettings(remesh=_string(table, "remesh", "fem", defaults.remesh, REMESH),
+                       remesh_quality=quality)
 
 
 def _loading(table):
