@@ -18,7 +18,7 @@ def _run(label, core, pressure, reached=0.5, distortion=None, steps=100, method=
     keep = S <= reached + 1e-12
     return pd.DataFrame({
         "label": label, "method": method or label.split(",")[0], "core": core,
-        "nodes": f"{5 * core + 1}x{5 * core + 1}", "steps": steps,
+        "nodes": f"{5 * core + 1}x{5 * core + 1}", "steps": steps, "to": S[-1],
         "settlement": S[keep], "pressure": pressure[keep], "min_angle": 14.0,
         "min_quality": 0.4, "distortion": (np.ones(len(S)) if distortion is None
                                            else distortion)[keep],
@@ -49,31 +49,38 @@ def test_summary_measures_against_the_reference():
     assert summary.loc["fem-th", "at_0.1B"] == pytest.approx(1.2 * 0.1 / 0.21, rel=1e-3)
 
 
-@pytest.mark.parametrize("efg_reach, efg_factor, expected", [
-    (0.5, 1.3, "refuted"),     # FEM reaches as far, Taylor-Hood is nearer everywhere
-    (0.5, 1.0, "open"),        # as far and as near: nothing settles it
-])
-def test_verdict_follows_the_measures(efg_reach, efg_factor, expected):
+def _deep(label, factor, reached):
+    """A run to 1 B on the built-in nodes (core 8) whose curve is the reference's times
+    ``factor``, stopping at ``reached``."""
+    deep = np.linspace(0.005, 1.0, 200)
+    keep = deep <= reached + 1e-12
+    return pd.DataFrame({
+        "label": f"{label}, to 1 B", "method": label.split("+")[0], "core": 8,
+        "nodes": "41x41", "steps": 100, "to": 1.0, "settlement": deep[keep],
+        "pressure": factor * 1.2 * deep[keep] / (0.11 + deep[keep]), "min_angle": 14.0,
+        "min_quality": 0.4, "distortion": 1.0, "min_rcond": np.nan, "iterations": 5,
+        "substeps": 1, "run_time": 100.0, "reached": deep[keep][-1]})
+
+
+def _study(efg_factor, fem_deep_reach):
     runs = []
     for core in (4, 8, 12):
         runs += [_run("fem-th", core, REF * (1 + 0.01 * (12 - core))),
                  _run("fem-p1p1-stab", core, REF * 1.05),
-                 _run("efg", core, REF * efg_factor, reached=efg_reach)]
+                 _run("efg", core, REF * efg_factor)]
     runs.append(_run("efg, 400 steps", 4, REF * efg_factor, steps=400, method="efg"))
-    summary = footing.summary(pd.concat(runs, ignore_index=True),
-                              reference=("fem-th", 12))
-    assert footing.verdict(summary)[0] == expected
+    runs += [_deep("efg", efg_factor, 1.0), _deep("fem-th", 1.0, fem_deep_reach),
+             _deep("fem-p1p1-stab", 1.05, fem_deep_reach)]
+    return footing.summary(pd.concat(runs, ignore_index=True), reference=("fem-th", 12))
 
 
-def test_verdict_supports_efg_that_goes_further_and_as_near():
-    runs = []
-    for core in (4, 8, 12):
-        runs += [_run("fem-th", core, REF, reached=0.5 if core == 12 else 0.2),
-                 _run("fem-p1p1-stab", core, REF * 1.05, reached=0.2),
-                 _run("efg", core, REF)]
-    summary = footing.summary(pd.concat(runs, ignore_index=True),
-                              reference=("fem-th", 12))
-    assert footing.verdict(summary)[0] == "supported"
+@pytest.mark.parametrize("efg_factor, fem_deep_reach, expected", [
+    (1.3, 1.0, "refuted"),     # FEM reaches as far, Taylor-Hood is nearer everywhere
+    (1.0, 1.0, "open"),        # as far and as near: nothing settles it
+    (1.0, 0.6, "supported"),   # EFG goes further on the built-in nodes, and as near
+])
+def test_verdict_follows_the_measures(efg_factor, fem_deep_reach, expected):
+    assert footing.verdict(_study(efg_factor, fem_deep_reach))[0] == expected
 
 
 def test_domain_summary_recovers_a_flamant_shift():

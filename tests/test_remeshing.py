@@ -25,7 +25,9 @@ from soil.triangulation import delaunay_triangles
 from soil.validation import case_from_dict
 
 FOOTING = "strip-footing"
-SMALL = ("discretisation.nx=11", "discretisation.ny=11")
+#: The footing on a 5 B x 5 B regular grid of 11 x 11 nodes (spacing B/2).
+SMALL = ("geometry.width=5", "geometry.height=5", "discretisation.nx=11",
+         "discretisation.ny=11")
 REMESH = ("fem.remesh=delaunay",)
 EVERY_STEP = (*REMESH, "fem.remesh_quality=1")   # every mesh is below 1: re-triangulate
 
@@ -36,7 +38,7 @@ def _run(case, method, overrides, elastic=False):
     case = load_case(case, overrides)
     if elastic:
         data = case.to_dict()
-        data["material"].pop("ocr")
+        data["material"].pop("ocr", None)
         data["material"]["model"] = "elastic"
         case = case_from_dict(data)
     return fem_solve(case, method, progress=False)
@@ -171,8 +173,8 @@ def test_an_elastic_footing_re_meshed_every_step_adds_no_error_beyond_the_mesh_o
     scale a transfer may not exceed."""
     common = ("time.end=10", "time.steps=10")
     fixed = _run(FOOTING, method, (*SMALL, *common), elastic=True)
-    finer = _run(FOOTING, method, ("discretisation.nx=21", "discretisation.ny=21", *common),
-                 elastic=True)
+    finer = _run(FOOTING, method, (*SMALL[:2], "discretisation.nx=21",
+                                   "discretisation.ny=21", *common), elastic=True)
     option = _run(FOOTING, method, (*SMALL, *common, *EVERY_STEP), elastic=True)
     assert option.summary["remeshes"] >= 3
     pressure = finer.history["pressure@footing"]
