@@ -1,6 +1,8 @@
 """The partially drained strip footing: the built-in ``strip-footing-consolidation``
 (the footing of ``strip-footing`` loaded in 10 s to half Prandtl's pressure, then held
-while the clay, k = 1e-6 m/s, consolidates) by each method on the built-in nodes.
+while the clay, k = 1e-6 m/s, consolidates) by each method of
+:data:`comparisons.footing.PLAIN` on the built-in nodes (a label with overrides, such
+as ``fem-th+remesh``, is not a method name).
 
 Right after loading the clay has had no time to drain, so the footing must have settled
 as far as the undrained footing of ``strip-footing`` at the same pressure: a check of
@@ -15,7 +17,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from comparisons import tables  # noqa: E402
-from comparisons.footing import METHODS, width  # noqa: E402
+from comparisons.footing import PLAIN, width  # noqa: E402
 from comparisons.verification import solved  # noqa: E402
 from soil.analytical import PRANDTL, undrained_strength  # noqa: E402
 from soil.problems import load_case  # noqa: E402
@@ -25,7 +27,7 @@ CASE = "strip-footing-consolidation"
 LOADED = 10.0
 
 
-def curves(methods=tuple(METHODS)):
+def curves(methods=tuple(PLAIN)):
     """Settlement and the probe's excess pore pressure against time, per method.
 
     Returns
@@ -71,25 +73,29 @@ def summary(table, undrained):
     Returns
     -------
     pandas.DataFrame
-        ``method, loaded`` (settlement over B at :data:`LOADED`), ``undrained`` (the
-        velocity-controlled footing's settlement over B at the same pressure), ``final``
-        (at the end), ``t50`` [s] (when half of ``final - loaded`` has come),
-        ``excess_loaded``, ``excess_final`` (over the footing pressure), ``run_time``
-        [s], ``iterations_per_step``.
+        ``method``, ``loaded_at`` [s] (the first output time at or after
+        :data:`LOADED`: the output times do not fall on it, and interpolating across
+        the end of the ramp would take a level short of the full load), ``pressure``
+        there (over ``(2 + pi) s_u``), ``loaded`` (settlement over B there),
+        ``undrained`` (the velocity-controlled footing's settlement over B at the same
+        pressure), ``final`` (at the end), ``t50`` [s] (the first output time by which
+        half of ``final - loaded`` has come), ``excess_loaded``, ``excess_final`` (over
+        the footing pressure), ``run_time`` [s], ``iterations_per_step``.
     """
     core = load_case(CASE).discretisation.x[0][1]
     rows = []
     for method, run in table.groupby("method", sort=False):
         t, s = run.time.to_numpy(), run.settlement.to_numpy()
-        loaded, final = np.interp(LOADED, t, s), s[-1]
+        at = np.flatnonzero(t >= LOADED * (1 - 1e-9))[0]
+        loaded, final = s[at], s[-1]
         ref = undrained[(undrained.label == method) & (undrained.core == core)]
         half = np.flatnonzero(s >= loaded + (final - loaded) / 2)
         rows.append({
-            "method": method, "loaded": loaded,
-            "undrained": np.interp(np.interp(LOADED, t, run.pressure), ref.pressure,
-                                   ref.settlement),
+            "method": method, "loaded_at": t[at], "pressure": run.pressure.iloc[at],
+            "loaded": loaded,
+            "undrained": np.interp(run.pressure.iloc[at], ref.pressure, ref.settlement),
             "final": final, "t50": t[half[0]] if half.size else np.nan,
-            "excess_loaded": np.interp(LOADED, t, run.excess),
+            "excess_loaded": run.excess.iloc[at],
             "excess_final": run.excess.iloc[-1], "run_time": run.run_time.iloc[0],
             "iterations_per_step": run.iterations.mean()})
     return pd.DataFrame(rows)
@@ -101,10 +107,10 @@ def figure(table, path):
     for k, (method, run) in enumerate(table.groupby("method", sort=False)):
         axes[0].semilogx(run.time, run.settlement, color=f"C{k}", label=method)
         axes[1].semilogx(run.time, run.excess, color=f"C{k}", label=method)
-    axes[0].set(xlabel="time [s]", ylabel="settlement / B",
+    axes[0].set(xlabel="time [s]", ylabel="settlement / B [-]",
                 title="footing under half Prandtl's pressure")
     axes[0].invert_yaxis()
-    axes[1].set(xlabel="time [s]", ylabel="excess pore pressure / footing pressure",
+    axes[1].set(xlabel="time [s]", ylabel="excess pore pressure / footing pressure [-]",
                 title="on the axis, B/2 under the footing")
     for ax in axes:
         ax.axvline(LOADED, color="k", lw=0.8, ls=":")
@@ -124,14 +130,24 @@ def section(summary):
         "",
         "The built-in `strip-footing-consolidation`: the footing loaded in 10 s to half "
         "Prandtl's pressure, then held to 1e6 s while the clay (k = 1e-6 m/s) drains "
-        "through the top beside it. When loaded it has settled "
+        "through the top beside it. At the first output after loading ("
+        + ", ".join(f"{t:.3g}" for t in dict.fromkeys(summary.loaded_at))
+        + " s; the pressure " + ", ".join(f"{p:.3g}" for p in summary.pressure)
+        + " of Prandtl's) it has settled "
         + ", ".join(f"{r.method} {r.loaded:.3g} B" for r in summary.itertuples())
         + "; the undrained footing of `strip-footing` at the same pressure, same method "
         "and nodes, " + ", ".join(f"{r.undrained:.3g}" for r in summary.itertuples())
-        + " B. At the end: " + ", ".join(f"{r.method} {r.final:.3g} B"
-                                         for r in summary.itertuples())
-        + ", half of the consolidation settlement after "
-        + ", ".join(f"{r.t50:.2g} s" for r in summary.itertuples()) + ".",
+        + " B (" + ", ".join(f"{100 * (r.loaded / r.undrained - 1):+.2g} %"
+                             for r in summary.itertuples())
+        + "). The excess pore pressure on the axis B/2 under the footing is then "
+        + ", ".join(f"{r.method} {r.excess_loaded:.3g}" for r in summary.itertuples())
+        + " of the footing pressure, at the end "
+        + ", ".join(f"{r.excess_final:.2g}" for r in summary.itertuples())
+        + ". At the end (1e6 s): " + ", ".join(f"{r.method} {r.final:.3g} B"
+                                             for r in summary.itertuples())
+        + "; half of the consolidation settlement has come by "
+        + ", ".join(f"{r.t50:.2g} s" for r in summary.itertuples())
+        + " (the first output time past it; the output times grow 25 % per step).",
         "",
         tables.to_markdown(summary, floatfmt="{:.3g}"),
         "",

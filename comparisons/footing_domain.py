@@ -141,12 +141,12 @@ def figure(table, path):
         label = f"{domain:g} B ({run.nodes.iloc[0]} nodes)"
         axes[0].plot(run.settlement, run.pressure, color=f"C{k}", label=label)
         axes[1].plot(run.shifted, run.pressure, color=f"C{k}", label=label)
-    axes[0].set(title=f"{METHOD} on square domains", xlabel="settlement / B",
-                ylabel="mean contact pressure / (2 + pi) s_u")
+    axes[0].set(title=f"{METHOD} on square domains", xlabel="settlement / B [-]",
+                ylabel="mean contact pressure / (2 + pi) s_u [-]")
     axes[1].set(title=f"shifted by Flamant's settlement to {max(table.domain):g} B",
-                xlabel="settlement / B + Flamant's extra settlement / B")
+                xlabel="(settlement + Flamant's extra settlement) / B [-]")
     for ax in axes:
-        ax.axhline(1.0, color="k", lw=1)
+        ax.axhline(1.0, color="k", lw=1, label="Prandtl (2 + pi) s_u")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     fig.savefig(path, dpi=150)
@@ -185,22 +185,26 @@ def section(summary):
         "",
         f"{METHOD} on square domains of " + ", ".join(f"{d:g}" for d in summary.domain)
         + " B (equal spacings of B/8 at the footing, growing about 15 % per cell "
-        "beyond). Doubling the domain lowers the pressure at 0.1 B by "
+        "beyond). Each doubling of the domain changes the pressure at 0.1 B by "
         + ", ".join(f"{100 * (b / a - 1):+.2g} %" for a, b in zip(
             summary["at_0.1B"], summary["at_0.1B"][1:]))
         + " and at 0.5 B by " + ", ".join(f"{100 * (b / a - 1):+.2g} %" for a, b in zip(
             summary["at_0.5B"], summary["at_0.5B"][1:]))
         + ": in plane strain no domain is large enough for that to stop, because a line "
         "load's settlement over an elastic base grows as ln(depth) (Flamant). At "
-        f"{level:g} (2 + pi) s_u each doubling moves the curve by "
+        + ("Prandtl's pressure" if level == 1 else f"{level:g} (2 + pi) s_u")
+        + " each doubling moves the curve by "
         + ", ".join(f"{v:.3g}" for v in summary[f"shift@{level:g}"][1:])
         + f" B; Flamant's extra settlement of the footing's force on the far field (the "
         f"clay's undrained tangent shear modulus {tangent_shear(load_case(CASE).material()):.3g}"
-        f" kPa, Poisson's ratio 1/2) is {big[f'flamant@{level:g}']:.3g} B. "
+        f" kPa, Poisson's ratio 1/2) is {big[f'flamant@{level:g}']:.3g} B per doubling. "
         "Shifted by it to the largest domain, successive curves differ by at most "
         + ", ".join(f"{100 * v:.2g} %" for v in summary.shifted_change[1:])
         + f" between {FROM:g} and {UPTO:g} B: what the boundaries still do to the "
-        f"mechanism under the footing. {_enough(summary)}",
+        f"mechanism under the footing. {_enough(summary)} In the table, `shift@L` is the "
+        "measured shift of the curve from the next smaller domain's at the pressure L "
+        "(2 + pi) s_u and `flamant@L` Flamant's (both settlement over B), "
+        "`shifted_change` the largest relative difference of the shifted curves.",
         "",
         tables.to_markdown(summary, floatfmt="{:.3g}"),
         "",

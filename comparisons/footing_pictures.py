@@ -30,7 +30,7 @@ from matplotlib.ticker import MaxNLocator  # noqa: E402
 from matplotlib.tri import Triangulation  # noqa: E402
 
 from comparisons import deformation, tables  # noqa: E402
-from comparisons.footing import CASE, DENSITIES, METHODS, width  # noqa: E402
+from comparisons.footing import CASE, DENSITIES, PLAIN, width  # noqa: E402
 from comparisons.footing_grids import refined  # noqa: E402
 from comparisons.verification import solved  # noqa: E402
 from soil.quality import DISTORTED, cell_quality  # noqa: E402
@@ -55,10 +55,12 @@ STRAIN_LABEL = "shear strain eps_s = sqrt(2/3 e':e'), Hencky [-]"
 PRESSURE_LABEL = "excess pore pressure p_w - p_w0 [kPa], compression positive"
 
 
-def runs(core=CORE, methods=METHODS):
+def runs(core=CORE, methods=PLAIN):
     """The footing study's runs of each method with ``core`` spacings per B at the
     footing (through the cached runner: the runs of :func:`comparisons.footing.curves`
-    are reused).
+    are reused). The default, :data:`comparisons.footing.PLAIN`, leaves out re-meshed
+    Taylor-Hood: its pictures and GIF would carry the name of its method, ``fem-th``,
+    and the elements drawn would be its initial mesh's, not the re-meshed ones.
 
     Returns
     -------
@@ -416,7 +418,6 @@ def section(data):
     results = data[RUNS]
     grid = results[0].case.discretisation
     gifs = " ".join(f"![{r.method}](figures/footing_{r.method}.gif)" for r in results)
-    levels = len(results[0].snapshots)
     return [
         "### Strip footing: deformed configurations, pore pressure, animations",
         "",
@@ -446,8 +447,10 @@ def section(data):
         "",
         gifs,
         "",
-        f"Each method's deformation ({len(frames(levels))} of its {levels} snapshots, "
-        "one colour scale), the settlement and contact pressure in the title.",
+        "Each method's deformation (" + ", ".join(
+            f"{r.method} {len(frames(len(r.snapshots)))} of its {len(r.snapshots)}"
+            for r in results) + " snapshots; one colour scale), the settlement and "
+        "contact pressure in the title.",
         "",
     ]
 

@@ -290,8 +290,11 @@ def markdown(data):
         f"{data['counts']['cached']} of {data['counts']['runs']} solver runs read from "
         "the cache in `.cache/runs` (keyed by case, method, linear solver and solver "
         "source, so only what changed is recomputed; from an empty cache the report "
-        "takes about ten minutes, most of it the bifurcation ensemble). Every number below comes from this run; tables are under `tables/`, "
-        "figures under `figures/`.",
+        "takes far longer: the strip-footing study's "
+        f"{len(data['footing'])} runs alone take "
+        f"{data['footing'].run_time.sum() / 3600:.1f} h of run time, shared by the "
+        "2 cores). Every number below comes from this run; tables are under "
+        "`tables/`, figures under `figures/`.",
         "",
         "## Material (Table 1) and the theoretical solution",
         "",

@@ -271,7 +271,7 @@ def figure(study, table, predicted, path):
                 color=f"C{methods.index(method)}", label=f"{method}, {run.nodes.iloc[0]} nodes")
     ax.axvline(predicted["onset"] * 100, color="k", lw=0.8, ls=":",
                label="loss of ellipticity (driver)")
-    ax.set(xlabel="axial strain (%)", ylabel="mean platen pressure / p'$_0$",
+    ax.set(xlabel="axial strain [%]", ylabel="mean platen pressure / p'$_0$ [-]",
            title="Rough platen: load-displacement")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
@@ -291,9 +291,13 @@ def figure(study, table, predicted, path):
         ax.set(title=f"{method}, {len(result.case.nodes())} nodes, "
                f"{100 * run.strain:.0f} %", aspect="equal", xlim=(-0.1, 4.0),
                ylim=(-0.1, 4.1))
+        if densities.index(density) == len(densities) - 1:
+            ax.set_xlabel("x [m]")
+        if methods.index(method) == 0:
+            ax.set_ylabel("y [m]")
         ax.legend(fontsize=7, loc="upper right")
     fig.colorbar(image, ax=fig.axes[1:], shrink=0.8, extend="max",
-                 label="shear strain eps_s = sqrt(2/3 e':e'), Hencky")
+                 label="shear strain eps_s = sqrt(2/3 e':e'), Hencky [-]")
     fig.savefig(path, dpi=130)
     plt.close(fig)
     return path
@@ -369,7 +373,8 @@ def section(data):
         "(current configuration) of the principal axis of the smallest zone carrying "
         "half the shear strain, where the field is localised (half the strain in less "
         "than a quarter of the body: localisation >= 0.5) and the zone slender (at most "
-        "half as wide as long); else no band (NaN). Predicted: Rudnicki and Rice's loss "
+        "half as wide as long); else no band (NaN, shown as -). Predicted: Rudnicki and "
+        "Rice's loss "
         f"of ellipticity on the driver's homogeneous path, at {100 * predicted['onset']:.2f}"
         f" % axial strain, for a band normal inclined {predicted['normal']:.1f} degrees, "
         f"so a band inclined {predicted['angle']:.1f} degrees. `diagonal` is the "
