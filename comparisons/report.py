@@ -258,7 +258,7 @@ def _verdicts(uc, bif, fits, col, t2, ec, ft, foot):
         f"{ec.loc[('terzaghi', 'max_error_load_after_0.1')]:.3f} of the load, fem-th "
         f"{ft.loc[('fem-th', 'moose'), 'error_p0_after_0.1']:.3f} p0 (same steps) |",
         "| EFG handles large, non-uniform deformation where FEM meets mesh distortion "
-        "(introduction) | " + " | ".join(footing.verdict(foot)) + " |",
+        "(introduction) | " + " | ".join(footing.verdict(*foot)) + " |",
         "",
     ]
 
@@ -418,7 +418,8 @@ def markdown(data):
         *footing_pictures.section(data),
         *shearband.section(data),
         *_verdicts(uc, data["bifurcation"].set_index("run"), data["infsup slopes"],
-                   data["column stability"], t2, ec, ft, data["footing"]),
+                   data["column stability"], t2, ec, ft,
+                   (data["footing"], data["footing curves"])),
         "## Where we differ from the paper",
         "",
         "- The 111-node specimen is reconstructed (7 x 9 grid + cell centres): the "

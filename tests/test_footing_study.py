@@ -71,7 +71,8 @@ def _study(efg_factor, fem_deep_reach):
     runs.append(_run("efg, 400 steps", 4, REF * efg_factor, steps=400, method="efg"))
     runs += [_deep("efg", efg_factor, 1.0), _deep("fem-th", 1.0, fem_deep_reach),
              _deep("fem-p1p1-stab", 1.05, fem_deep_reach)]
-    return footing.summary(pd.concat(runs, ignore_index=True), reference=("fem-th", 12))
+    table = pd.concat(runs, ignore_index=True)
+    return footing.summary(table, reference=("fem-th", 12)), table
 
 
 @pytest.mark.parametrize("efg_factor, fem_deep_reach, expected", [
@@ -80,7 +81,7 @@ def _study(efg_factor, fem_deep_reach):
     (1.0, 0.6, "supported"),   # EFG goes further on the built-in nodes, and as near
 ])
 def test_verdict_follows_the_measures(efg_factor, fem_deep_reach, expected):
-    assert footing.verdict(_study(efg_factor, fem_deep_reach))[0] == expected
+    assert footing.verdict(*_study(efg_factor, fem_deep_reach))[0] == expected
 
 
 def test_domain_summary_recovers_a_flamant_shift():
