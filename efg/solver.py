@@ -50,9 +50,9 @@ from soil import weakform
 from soil.bifurcation import h1_gram, restricted_eigenvalue
 from soil.coupling import Scales, history_row, material_update, newton, run, timed
 from soil.geostatic import buoyant_weight, initial_state, total_stress
+from soil.results import Snapshot, permeability
 from soil.kinematics import cauchy_traction, invariants
 from soil.case import EDGES
-from soil.results import Snapshot
 
 
 @dataclass
@@ -560,4 +560,5 @@ def _snapshot(model, points, t):
             "p_eff": p, "q": q, "stretching": points.stretching,
             "support_radius": at.support}
     data.update({k: v for k, v in points.state.items()})
+    data.update(permeability(model.case, points.state["v"]))
     return Snapshot(t, points.nodes.copy(), data)

@@ -80,7 +80,7 @@ from soil.errors import ConvergenceError, InputError
 from soil.geostatic import buoyant_weight, initial_state, total_stress
 from soil.kinematics import cauchy_traction, invariants, prescribed_increment
 from soil.quality import cell_quality
-from soil.results import Snapshot
+from soil.results import Snapshot, permeability
 from soil.triangulation import close_boundary, conforms, delaunay_triangles
 
 
@@ -307,7 +307,7 @@ def _initial_state(model):
     ub, _ = cell_bases(space.mesh0, space.pair)
     n_points = ub.dx.size
     stress, state = initial_state(case, model.material,
-                                  ub.global_coordinates().value.reshape(2, -1).T)
+                                  np.asarray(ub.global_coordinates()).reshape(2, -1).T)
     return State(vertices=case.nodes(), stress=stress, state=state,
                  p=np.full(space.n_p, float(case.initial_pore_pressure)),
                  weights=ub.dx.ravel(), stretching=np.zeros((n_points, 4)),
@@ -341,7 +341,7 @@ def _discretise(model, topology, vertices, t1, timings):
             if len(space.edge_facets[name]) == 0:
                 continue
             fb = space.facet_basis(mesh, name)
-            x0 = space.facet_basis(space.mesh0, name).global_coordinates().value
+            x0 = np.asarray(space.facet_basis(space.mesh0, name).global_coordinates())
             sigma0 = total_stress(model.case, model.material, x0.reshape(2, -1).T)
             load = cauchy_traction(sigma0.reshape(x0.shape[1:] + (4,)),
                                    np.moveaxis(fb.normals, 0, -1))
@@ -615,5 +615,6 @@ def _snapshot(model, current, t):
         mean = (volume * values.reshape(E, -1)).sum(1)
         data[name] = np.bincount(cells.T.ravel(), np.repeat(mean, cells.shape[0]),
                                  minlength=mesh0.p.shape[1]) / node_volume
+    data.update(permeability(model.case, data["v"]))
     return Snapshot(t, current.vertices.copy(), data,
                     cells=[(current.topology.space.cell_type, cells.T.copy())])
