@@ -75,6 +75,24 @@ def k0(case, material):
     return material.k0_nc() if value == "nc" else value
 
 
+def normal_void_ratio(case, material, sigma_v):
+    """Void ratio of the normally consolidated one-dimensional state at ``sigma'_v`` [kPa]
+    on the case's compression line (Cam-clay): the line a geostatic start is anchored
+    on, and the one the material's own initial state lies on without ``e_ref``.
+
+    Examples
+    --------
+    >>> from soil.problems import load_case
+    >>> case = load_case("large-strain-column")
+    >>> round(float(normal_void_ratio(case, case.material(), 10.0)), 12)
+    2.4
+    """
+    nc = material.k0_nc()
+    sigma_v = np.asarray(sigma_v, dtype=float)
+    return material.volume((1 + 2 * nc) / 3 * sigma_v, _normal_size(material, sigma_v),
+                           _anchor(case, material)) - 1
+
+
 def _geostatic(case, material, sigma_v):
     """Stress and state at vertical effective stresses ``sigma_v`` [kPa] (compression
     positive)."""
