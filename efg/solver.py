@@ -18,6 +18,11 @@ which exceeds the tolerance on fine grids. A step that does not converge, invert
 background cell or fails in the material is halved up to ``soil.coupling.MAX_CUTS``
 times before the run stops with one clear error.
 
+The initial state (:func:`soil.geostatic.initial_state`, uniform or geostatic) is set at
+the nodes, and its total stress ``sigma0 . n`` at each boundary point's initial position
+loads the boundary, with the edge tractions; under gravity the buoyant weight at the
+integration points (:mod:`soil.geostatic`) loads the domain.
+
 Material state lives on the nodes (the material points): at the start of a step the
 integration points take stress and state from the nodes by MLS interpolation, and after a
 converged step the nodes update their own state with the nodal stretching ``D^I`` (the one

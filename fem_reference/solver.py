@@ -7,8 +7,11 @@ solved on the mesh at x_n (bases rebuilt there) for the displacement increment `
 points, which are the material points (their state needs no remapping); the stress is the
 material's return mapping with the midpoint strain increment and the Hughes-Winget spin
 (:func:`soil.coupling.material_update`). The external load is the initial total stress
-``sigma0 . n`` on every boundary facet plus the edge traction x load factor on free
-components (a dead load on the start-of-step facets).
+``sigma0 . n`` on every boundary facet (sigma0 at the facet point's initial position,
+:func:`soil.geostatic.total_stress`: uniform or geostatic) plus the edge traction x load
+factor on free components (a dead load on the start-of-step facets), and under gravity
+the buoyant weight of the elements (:mod:`soil.geostatic`). The initial state is set at
+the quadrature points' initial positions.
 
 Newton's method (:func:`soil.coupling.newton`) starts from the last step's velocity x dt
 (``L x`` at the first step). Convergence, cut-back and scales are those of
