@@ -96,7 +96,7 @@ def test_geostatic_elastic_layer_stays_put(method, bound):
     """Started geostatically and not loaded, nothing moves: exactly with Taylor-Hood
     (its quadratic displacement holds the linear stress field; round-off bound
     1e-12 of the self-weight settlement), to the EFG's integration error otherwise
-    (measured 5.3e-4 of it)."""
+    (measured 3.9e-4 of it)."""
     case = _layer("initial.stress=geostatic", "initial.surcharge=10.0", "initial.k0=0.5",
                   "time.end=1e4", "time.steps=2")
     scale = self_weight_settlement(1.65 * 9.81 / 2, 10.0, 1e4 * 0.7 / (1.3 * 0.4))
@@ -105,20 +105,21 @@ def test_geostatic_elastic_layer_stays_put(method, bound):
 
 
 def test_geostatic_camclay_layer_stays_put_with_taylor_hood():
-    """The large-strain column without its load: its nonlinear sigma'_v(y) leaves only
-    the quadrature error of Taylor-Hood (measured 4e-8 m; bound 1e-8 of the height)."""
+    """The large-strain column without its load: its nonlinear sigma'_v(y) leaves at
+    most the quadrature error of Taylor-Hood (measured: no motion at all; EFG moves
+    5e-5 m; bound 1e-8 of the height)."""
     case = load_case("large-strain-column", overrides=["loading.load=0.0", "time.end=1e6",
                                                        "time.steps=2"])
     u = _solve(case, "fem-th").snapshots[-1].point_data["u"]
     assert np.abs(u).max() < 1e-8 * 10.0
 
 
-@pytest.mark.parametrize("method, rtol", [("fem-th", 1e-4), ("efg", 5e-3)])
+@pytest.mark.parametrize("method, rtol", [("fem-th", 1e-4), ("efg", 1e-3)])
 def test_weightless_layer_loaded_by_gravity_settles_to_the_static_solution(method, rtol):
     """Started weightless (uniform, zero stress), the weight acts from t = 0+: the
     excess pore pressure drains and the top settles to the finite-strain closed form
-    (:func:`soil.analytical.self_weight_settlement`; measured 1e-5 for fem-th, 1.2e-3
-    for EFG). The small-strain value is 0.2 % larger."""
+    (:func:`soil.analytical.self_weight_settlement`; measured 2.3e-6 for fem-th,
+    1.0e-4 for EFG). The small-strain value is 0.2 % larger."""
     case = _layer("time.end=1e6", "time.dt0=100.0", "time.growth=1.5", "time.dt_max=2e5")
     history = _solve(case, method).history
     exact = self_weight_settlement(1.65 * 9.81 / 2, 10.0, 1e4 * 0.7 / (1.3 * 0.4))
