@@ -8,7 +8,7 @@ import numpy as np
 from tqdm import tqdm
 
 from comparisons import (figures, footing, footing_consolidation, footing_domain,
-                         footing_pictures, infsup, peers, runner, shearband,
+                         footing_pictures, infsup, large_strain, peers, runner, shearband,
                          stability_figures, stability_report, tables, uniqueness,
                          verification)
 
@@ -114,6 +114,19 @@ TASKS = [
             "footing_consolidation", "footing consolidation curves"),
     *footing_pictures.TASKS,
     *shearband.TASKS,
+    _table("large strain curves", large_strain.curves, "large_strain_curves"),
+    _table("large strain small", large_strain.small_strain, "large_strain_small_strain",
+           "large strain curves"),
+    _table("large strain", large_strain.summary, "large_strain", "large strain curves"),
+    _table("large strain profiles", large_strain.profiles, "large_strain_profiles"),
+    _table("large strain profile errors", large_strain.profile_summary,
+           "large_strain_profile_errors", "large strain profiles"),
+    _figure("large strain figure", large_strain.figure, "large_strain",
+            "large strain curves", "large strain small"),
+    _figure("large strain profiles figure",
+            lambda table, path: large_strain.profile_figure(table, large_strain.CASES[0],
+                                                            path),
+            "large_strain_profiles", "large strain profiles"),
     _figure("consolidation figure", figures.consolidation, "consolidation",
             "terzaghi histories", "mandel histories"),
 ]
@@ -417,6 +430,8 @@ def markdown(data):
         *footing_consolidation.section(data["footing consolidation"]),
         *footing_pictures.section(data),
         *shearband.section(data),
+        *large_strain.section(data["large strain"], data["large strain small"],
+                              data["large strain profile errors"]),
         *_verdicts(uc, data["bifurcation"].set_index("run"), data["infsup slopes"],
                    data["column stability"], t2, ec, ft,
                    (data["footing"], data["footing curves"])),

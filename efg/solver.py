@@ -18,6 +18,11 @@ which exceeds the tolerance on fine grids. A step that does not converge, invert
 background cell or fails in the material is halved up to ``soil.coupling.MAX_CUTS``
 times before the run stops with one clear error.
 
+The initial state (:func:`soil.geostatic.initial_state`, uniform or geostatic) is set at
+the nodes, and its total stress ``sigma0 . n`` at each boundary point's initial position
+loads the boundary, with the edge tractions; under gravity the buoyant weight at the
+integration points (:mod:`soil.geostatic`) loads the domain.
+
 Material state lives on the nodes (the material points): at the start of a step the
 integration points take stress and state from the nodes by MLS interpolation, and after a
 converged step the nodes update their own state with the nodal stretching ``D^I`` (the one
@@ -49,9 +54,10 @@ from efg.mls import ShapeFunctions
 from soil import weakform
 from soil.bifurcation import h1_gram, restricted_eigenvalue
 from soil.coupling import Scales, history_row, material_update, newton, run, timed
+from soil.geostatic import buoyant_weight, initial_state, total_stress
+from soil.results import Snapshot, permeability
 from soil.kinematics import cauchy_traction, invariants
 from soil.case import EDGES
-from soil.results import Snapshot
 
 
 @dataclass
@@ -83,14 +89,16 @@ class Model:
     edges: np.ndarray
     scales: Scales
     initial_bp: np.ndarray   # (G, 2) boundary points in the initial configuration [m]
+    sigma0_bp: np.ndarray    # (G, 4) initial total stress there [kPa]
 
     @classmethod
     def build(cls, case):
         material = case.material()
         loop = case.boundary_loop()
         edges = segment_edges(case.nodes(), loop, case.geometry)
-        return cls(case, material, loop, edges, Scales.of(case, material),
-                   boundary_points(case.nodes(), loop, edges).points)
+        initial_bp = boundary_points(case.nodes(), loop, edges).points
+        return cls(case, material, loop, edges, Scales.of(case, material), initial_bp,
+                   total_stress(case, material, initial_bp))
 
     @property
     def beta(self):
@@ -142,10 +150,10 @@ def solve(case, progress=True):
 def _initial_points(model):
     case = model.case
     nodes = case.nodes()
-    stress, state = model.material.initial_state(len(nodes))
+    stress, state = initial_state(case, model.material, nodes)
     n_bp = len(model.loop) * BOUNDARY_ORDER
     return Points(nodes=nodes, stress=stress, state=state,
-                  p=np.full(len(nodes), case.initial_pore_pressure),
+                  p=np.full(len(nodes), float(case.initial_pore_pressure)),
                   gap=np.zeros((n_bp, 2)), plate=0.0, plate_gap=np.zeros(n_bp),
                   probes=np.array([p.point for p in case.probes]).reshape(-1, 2),
                   stretching=np.zeros((len(nodes), 4)),
@@ -189,7 +197,8 @@ class _System:
         self.grad_p_n = np.stack([disc.sp.dphi_dx @ points.p, disc.sp.dphi_dy @ points.p], 1)
         self.du_bar = bc.target_increment(case.loading.L, disc.bp.points, self.dt)
         self.alpha_u, self.alpha_p = _penalties(model, [0.0, self.dt]).values()
-        self.traction = (cauchy_traction(model.scales.sigma0, disc.bp.normal)
+        self.weight = buoyant_weight(case, self.state_n["v"])
+        self.traction = (cauchy_traction(model.sigma0_bp, disc.bp.normal)
                          + bc.traction * bc.loaded * case.loading.factor(t1))
         self.plate_force = case.plate_force(t1)
         self.rigid_w = self.alpha_u * disc.bp.weights * bc.rigid
@@ -210,9 +219,10 @@ class _System:
                               "a background cell")
         p_q = disc.sp.phi @ self.p
         self.total = weakform.total_stress(self.stress, p_q, fluid)
-        grad_p = np.stack([disc.sp.dphi_dx @ self.p, disc.sp.dphi_dy @ self.p], 1)
-        r = weakform.residual(self.total, self.J, self.Finv, disc.w, p_q, self.p_n, grad_p,
-                              fluid, self.dt, model.beta, self.grad_p_n)
+        self.grad_p = np.stack([disc.sp.dphi_dx @ self.p, disc.sp.dphi_dy @ self.p], 1)
+        r = weakform.residual(self.total, self.J, self.Finv, disc.w, p_q, self.p_n,
+                              self.grad_p, fluid, self.dt, model.beta, self.grad_p_n,
+                              self.state_n["v"], self.weight)
 
         R_u = np.concatenate([_tested(disc.tu, r[:, f]) for f in range(2)])
         ub = disc.sub.phi @ self.du.reshape(2, n).T                          # (G, 2)
@@ -248,7 +258,7 @@ class _System:
         """The tangent of ``(ux, uy, p_w)`` at the iterate, penalties included."""
         return _tangent(self.model, self.disc, self.stress, self.total,
                         self.material_tangent, self.J, self.Finv, self.dt, self.alpha_u,
-                        self.alpha_p)
+                        self.alpha_p, self.state_n["v"], self.grad_p)
 
     def tangent(self):
         """:meth:`domain_tangent` bordered by the plate and the pin, if any."""
@@ -296,12 +306,13 @@ def _tested(shape, r):
     return out
 
 
-def _tangent(model, disc, stress, total, tangent, J, Finv, dt, alpha_u, alpha_p):
+def _tangent(model, disc, stress, total, tangent, J, Finv, dt, alpha_u, alpha_p, v_n,
+             grad_p):
     """The Newton tangent of ``(ux, uy, p_w)`` (fields blocked) at the current iterate:
     :func:`soil.weakform.tangent` in the domain, the penalties on the boundary."""
     bc = disc.bc
     coeff = weakform.tangent(tangent, stress, total, J, Finv, disc.w, model.case.fluid, dt,
-                             model.beta)
+                             model.beta, v_n, grad_p)
     pen = np.zeros((len(disc.bp.weights), 3, 3, 3, 3))
     constrained = bc.constrained | np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
     pen[:, :2, :, :2, :] = penalty_coefficients(disc.bp, constrained, alpha_u)
@@ -554,4 +565,5 @@ def _snapshot(model, points, t):
             "p_eff": p, "q": q, "stretching": points.stretching,
             "support_radius": at.support}
     data.update({k: v for k, v in points.state.items()})
+    data.update(permeability(model.case, points.state["v"]))
     return Snapshot(t, points.nodes.copy(), data)

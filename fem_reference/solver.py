@@ -7,8 +7,11 @@ solved on the mesh at x_n (bases rebuilt there) for the displacement increment `
 points, which are the material points (their state needs no remapping); the stress is the
 material's return mapping with the midpoint strain increment and the Hughes-Winget spin
 (:func:`soil.coupling.material_update`). The external load is the initial total stress
-``sigma0 . n`` on every boundary facet plus the edge traction x load factor on free
-components (a dead load on the start-of-step facets).
+``sigma0 . n`` on every boundary facet (sigma0 at the facet point's initial position,
+:func:`soil.geostatic.total_stress`: uniform or geostatic) plus the edge traction x load
+factor on free components (a dead load on the start-of-step facets), and under gravity
+the buoyant weight of the elements (:mod:`soil.geostatic`). The initial state is set at
+the quadrature points' initial positions.
 
 Newton's method (:func:`soil.coupling.newton`) starts from the last step's velocity x dt
 (``L x`` at the first step). Convergence, cut-back and scales are those of
@@ -77,9 +80,10 @@ from soil import weakform
 from soil.bifurcation import h1_gram, restricted_eigenvalue
 from soil.coupling import Scales, history_row, material_update, newton, run, timed
 from soil.errors import ConvergenceError, InputError
+from soil.geostatic import buoyant_weight, initial_state, total_stress
 from soil.kinematics import cauchy_traction, invariants, prescribed_increment
 from soil.quality import cell_quality
-from soil.results import Snapshot
+from soil.results import Snapshot, permeability
 from soil.triangulation import close_boundary, conforms, delaunay_triangles
 
 
@@ -305,7 +309,8 @@ def _initial_state(model):
     case, space = model.case, model.space
     ub, _ = cell_bases(space.mesh0, space.pair)
     n_points = ub.dx.size
-    stress, state = model.material.initial_state(n_points)
+    stress, state = initial_state(case, model.material,
+                                  np.asarray(ub.global_coordinates()).reshape(2, -1).T)
     return State(vertices=case.nodes(), stress=stress, state=state,
                  p=np.full(space.n_p, float(case.initial_pore_pressure)),
                  weights=ub.dx.ravel(), stretching=np.zeros((n_points, 4)),
@@ -339,7 +344,10 @@ def _discretise(model, topology, vertices, t1, timings):
             if len(space.edge_facets[name]) == 0:
                 continue
             fb = space.facet_basis(mesh, name)
-            load = cauchy_traction(model.scales.sigma0, np.moveaxis(fb.normals, 0, -1))
+            x0 = np.asarray(space.facet_basis(space.mesh0, name).global_coordinates())
+            sigma0 = total_stress(model.case, model.material, x0.reshape(2, -1).T)
+            load = cauchy_traction(sigma0.reshape(x0.shape[1:] + (4,)),
+                                   np.moveaxis(fb.normals, 0, -1))
             loaded = np.array([edge.ux, edge.uy]) == "free"
             bare = ~topology.constraints.unloaded[name][:, None, None]
             load = load + bare * loaded * np.asarray(edge.traction, float) * factor
@@ -474,8 +482,9 @@ class _System:
     def domain_tangent(self):
         """The tangent of the reduced unknowns (essential conditions eliminated)."""
         T = self.con.T
-        return T.T @ _tangent(self.model, self.disc, self.stress, self.total,
-                              self.material_tangent, self.J, self.Finv, self.dt) @ T
+        return T.T @ _tangent(self.model, self.disc, self.current, self.x, self.stress,
+                              self.total, self.material_tangent, self.J, self.Finv,
+                              self.dt) @ T
 
     def tangent(self):
         """:meth:`domain_tangent` bordered by the mean-pressure pin, if any."""
@@ -513,19 +522,22 @@ def _residual(model, disc, current, x, stress, J, Finv, dt):
     p_vals = disc.p.values(x[2 * n_u:]).reshape(E * Q, 3)
     pn_vals = disc.p.values(current.p).reshape(E * Q, 3)
     total = weakform.total_stress(stress, p_vals[:, 0], fluid)
+    v_n = current.state["v"]
     r = weakform.residual(total, J, Finv, disc.dx.ravel(), p_vals[:, 0], pn_vals[:, 0],
-                          p_vals[:, 1:], fluid, dt, model.beta, pn_vals[:, 1:])
+                          p_vals[:, 1:], fluid, dt, model.beta, pn_vals[:, 1:], v_n,
+                          buoyant_weight(model.case, v_n))
     R_u = disc.u.vector(r[:, :2].reshape(E, Q, 2, 3)) - disc.external
     R_p = disc.p.vector(r[:, 2:].reshape(E, Q, 1, 3))
     return np.concatenate([R_u, R_p]), total
 
 
-def _tangent(model, disc, stress, total, tangent, J, Finv, dt):
-    """The full Jacobian of :func:`_residual` with respect to ``[du, p]``
-    (:func:`soil.weakform.tangent`, assembled block by block)."""
+def _tangent(model, disc, current, x, stress, total, tangent, J, Finv, dt):
+    """The full Jacobian of :func:`_residual` with respect to ``[du, p]`` at the unknowns
+    x (:func:`soil.weakform.tangent`, assembled block by block)."""
     E, Q = disc.dx.shape
+    grad_p = disc.p.values(x[2 * disc.u.n:]).reshape(E * Q, 3)[:, 1:]
     c = weakform.tangent(tangent, stress, total, J, Finv, disc.dx.ravel(), model.case.fluid,
-                         dt, model.beta).reshape(E, Q, 3, 3, 3, 3)
+                         dt, model.beta, current.state["v"], grad_p).reshape(E, Q, 3, 3, 3, 3)
     u, p = slice(0, 2), slice(2, 3)
     return sp.bmat([[block(disc.u, disc.u, c[:, :, u, :, u]),
                      block(disc.u, disc.p, c[:, :, u, :, p])],
@@ -606,5 +618,6 @@ def _snapshot(model, current, t):
         mean = (volume * values.reshape(E, -1)).sum(1)
         data[name] = np.bincount(cells.T.ravel(), np.repeat(mean, cells.shape[0]),
                                  minlength=mesh0.p.shape[1]) / node_volume
+    data.update(permeability(model.case, data["v"]))
     return Snapshot(t, current.vertices.copy(), data,
                     cells=[(current.topology.space.cell_type, cells.T.copy())])

@@ -338,3 +338,33 @@ def undrained_poisson(material, fluid):
         return 0.5
     Ku = K + fluid.biot_alpha**2 / fluid.storage
     return (3 * Ku - 2 * G) / (2 * (3 * Ku + G))
+
+
+def self_weight_settlement(weight, height, modulus):
+    """Settlement [m, positive down] of a laterally confined hypoelastic layer on a fixed
+    base under its own buoyant weight, drained to equilibrium, at finite strain.
+
+    The Jaumann rate with constant constrained modulus M gives, with no rotation, a
+    vertical Cauchy stress ``M ln(lambda)`` (lambda the vertical stretch); the weight
+    above a particle at initial height Y is ``weight (H - Y)`` per unit area (weight per
+    initial volume, conserved), so ``lambda = exp(-weight (H - Y) / M)`` and the
+    settlement ``int (1 - lambda) dY = H - (M / weight)(1 - exp(-weight H / M))``; to
+    first order the small-strain ``weight H^2 / (2 M)``.
+
+    Parameters
+    ----------
+    weight : float
+        Buoyant unit weight in the initial state [kN/m3].
+    height : float
+        Initial height H [m].
+    modulus : float
+        Constrained modulus ``M = K + 4G/3`` [kPa].
+
+    Examples
+    --------
+    >>> a = self_weight_settlement(8.0, 10.0, 1e4)
+    >>> round(a, 6), round(8.0 * 10.0**2 / (2 * 1e4), 6)
+    (0.039894, 0.04)
+    """
+    a = weight * height / modulus
+    return float(height * (1 - (-np.expm1(-a)) / a))

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from soil.errors import ConvergenceError, require
+from soil.errors import ConvergenceError, InputError, require
 from soil.kinematics import (DEVIATORIC, IDENTITY, deviator, double_dot, hughes_winget,
                              invariants)
 from soil.material import Material
@@ -162,11 +162,63 @@ class CamClay(Material):
         if not np.all(p > 0):
             raise ConvergenceError(f"Cam-clay needs p' > 0 at every point; a carried stress "
                                    f"has p' = {p.min():.3g}")
+        return {**state, "pc": np.maximum(state["pc"], self.size(p, q))}
+
+    def size(self, p, q):
+        """The size p'c of the yield surface through ``(p', q)``: ``p' exp(q / (M p'))``
+        (original), ``p' + q^2 / (M^2 p')`` (modified)."""
         if self.model == "original":
-            surface = p * np.exp(q / (self.M * p))
+            return p * np.exp(q / (self.M * p))
+        return p + q**2 / (self.M**2 * p)
+
+    def volume(self, p, pc, anchor):
+        """Specific volume of a state ``(p', p'c)`` on the swelling line of p'c's normal
+        compression, ``v = N - (lambda - kappa) ln p'c - kappa ln p'``, with N such that
+        the state ``anchor = (p', p'c, v)`` lies on it.
+
+        Exact for the modified model, whose hardening ``dp'c / p'c = v d eps_v^p /
+        (lambda - kappa)`` and swelling ``dp'/p' = -v d eps_v / kappa`` keep N constant;
+        the original model's constant MD makes ``dv^p = (v / v0)(lambda - kappa) d ln
+        p'c``, the same to first order in the change of v.
+        """
+        p_a, pc_a, v_a = anchor
+        N = v_a + (self.lam - self.kappa) * np.log(pc_a) + self.kappa * np.log(p_a)
+        return N - (self.lam - self.kappa) * np.log(pc) - self.kappa * np.log(p)
+
+    def k0_nc(self, v=None):
+        """K0 of normally consolidated one-dimensional compression (``eps_xx = eps_zz =
+        0``) at specific volume v (default v0): the stress ratio ``eta = q / p'`` of the
+        proportional path whose elastic and plastic strains are purely axial, ``d eps_q =
+        (2/3) d eps_v``, and ``K0 = (3 - eta) / (3 + 2 eta)``. The modified model's is the
+        same at every v; the original's plastic strain per ``d ln p'c``, MD, is fixed by
+        e0 while the elastic one, ``kappa / v``, is not, so its K0 drifts as v falls.
+
+        Examples
+        --------
+        >>> clay = CamClay(lam=0.11, kappa=0.04, M=1.42, nu=0.333, e0=0.83, p0=3.0,
+        ...                model="modified")
+        >>> round(clay.k0_nc(), 4), round(clay.k0_nc(v=1.5), 4)
+        (0.5671, 0.5671)
+        """
+        from scipy.optimize import brentq
+
+        v = self.v0 if v is None else v
+        K, G = self.moduli(self.p0, v)
+        p = self.p0
+        dv = (self.lam - self.kappa) / v if self.model == "modified" else self.MD
+        if self.model == "original":
+            flow = lambda eta: 1.0 / (self.M - eta)             # d eps_q^p / d eps_v^p
         else:
-            surface = p + q**2 / (self.M**2 * p)
-        return {**state, "pc": np.maximum(state["pc"], surface)}
+            flow = lambda eta: 2 * eta / (self.M**2 - eta**2)
+        mismatch = lambda eta: (eta * p / (3 * G) + dv * flow(eta)
+                                - 2 / 3 * (p / K + dv))
+        if mismatch(0.0) > 0:
+            raise InputError(f"the {self.model} Cam-clay with lambda = {self.lam}, kappa = "
+                             f"{self.kappa}, M = {self.M} has no normally consolidated K0 "
+                             "<= 1 (its plastic flow at q = 0 is already deviatoric): give "
+                             "initial.k0 a number")
+        eta = brentq(mismatch, 0.0, self.M * (1 - 1e-12))
+        return float((3 - eta) / (3 + 2 * eta))
 
     def _f(self, p, q, pc, scale):
         """Yield function and its derivatives ``(f, f_p, f_q, f_pc, f_pp, f_pq, f_qq, f_ppc)``.

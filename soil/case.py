@@ -8,7 +8,8 @@ built-in cases).
 Conventions: x to the right, y up, origin at the lower-left corner of the rectangle;
 stress and traction are tension positive (a traction ``[0, -1]`` on the top edge is a
 compressive load); pore water pressure p_w is compression positive;
-``sigma = sigma' - alpha p_w I``. No body forces.
+``sigma = sigma' - alpha p_w I``. Gravity, if any, acts along -y; p_w is then the pore
+pressure in excess of hydrostatic (:mod:`soil.geostatic`).
 """
 
 from dataclasses import asdict, dataclass, field
@@ -32,6 +33,8 @@ SEGMENT_TOLERANCE = 1e-9
 """A point within this fraction of the smallest grid spacing of a segment's end belongs to
 the segment (:meth:`Case.edge_conditions`)."""
 ON_FAILURE = ("error", "stop")
+PERMEABILITY_LAWS = ("constant", "taylor", "kozeny-carman")
+STRESS_STARTS = ("uniform", "geostatic")
 MAX_STEPS = 100_000
 """Largest number of time steps of a case (``time.steps``, or geometric steps to the end)."""
 
@@ -117,27 +120,89 @@ class Diagnostics:
 
 @dataclass(frozen=True)
 class Fluid:
-    """Pore fluid and coupling: permeability k [m/s], gamma_w [kN/m3], Biot alpha, S [1/kPa].
+    """Pore fluid and coupling: permeability k [m/s] and its law, gamma_w [kN/m3], Biot
+    alpha, S [1/kPa], and the specific gravity Gs of the solids (their weight under
+    gravity).
 
-    The Darcy mobility entering the continuity equation is ``k / gamma_w``.
+    The Darcy mobility entering the continuity equation is ``k / gamma_w``. With
+    ``permeability_law = "constant"`` k is ``permeability``; otherwise it falls with the
+    void ratio e (:meth:`mobility_at`): Taylor's ``k = k_ref 10^((e - e_k) / C_k)`` or
+    Kozeny-Carman's ``k = k_ref (e^3 / (1 + e)) / (e_k^3 / (1 + e_k))``, with ``k_ref =
+    permeability``, ``e_k = permeability_e`` and ``C_k = permeability_ck``.
     """
 
     permeability: float = 0.0
     gamma_w: float = 9.81
     biot_alpha: float = 1.0
     storage: float = 0.0
+    permeability_law: str = "constant"
+    permeability_e: float | None = None
+    permeability_ck: float | None = None
+    specific_gravity: float = 2.65
 
     @property
     def mobility(self):
-        """``k / gamma_w`` [m2/(kPa s)]."""
+        """``k / gamma_w`` [m2/(kPa s)] at the reference void ratio (``k_ref``)."""
         return self.permeability / self.gamma_w
+
+    def mobility_at(self, v):
+        """``k(e) / gamma_w`` [m2/(kPa s)] and its derivative with respect to the specific
+        volume ``v = 1 + e``, at each point.
+
+        Examples
+        --------
+        Taylor's law falls tenfold per ``C_k`` of void ratio:
+
+        >>> fluid = Fluid(permeability=1e-8, permeability_law="taylor",
+        ...               permeability_e=1.0, permeability_ck=0.5)
+        >>> k, dk = fluid.mobility_at(np.array([2.0, 1.5]))
+        >>> [round(float(x), 6) for x in k * fluid.gamma_w / 1e-8]
+        [1.0, 0.1]
+        """
+        v = np.asarray(v, dtype=float)
+        if self.permeability_law == "constant":
+            return np.full_like(v, self.mobility), np.zeros_like(v)
+        e, e_k = v - 1.0, self.permeability_e
+        if self.permeability_law == "taylor":
+            k = self.mobility * 10.0 ** ((e - e_k) / self.permeability_ck)
+            return k, k * np.log(10.0) / self.permeability_ck
+        k = self.mobility * (e**3 / v) / (e_k**3 / (1.0 + e_k))
+        return k, k * (3.0 / e - 1.0 / v)
+
+
+@dataclass(frozen=True)
+class Gravity:
+    """Gravitational acceleration g [m/s2] along -y (0: weightless)."""
+
+    g: float = 0.0
 
 
 @dataclass(frozen=True)
 class Initial:
-    """Initial pore pressure: a number [kPa] or ``"balance"`` (total stress zero)."""
+    """The initial state (:mod:`soil.geostatic`).
+
+    ``pore_pressure``: a number [kPa] or ``"balance"`` (total stress zero). ``stress``:
+    ``"uniform"`` (the material's p'0, e0, ocr everywhere) or ``"geostatic"``: the
+    vertical effective stress of the buoyant weight under the ``surcharge`` [kPa] on top,
+    horizontal ``k0`` times it (a number, or ``"nc"``: the material's normally
+    consolidated value), the void ratio on the compression line anchored at ``e_ref``
+    under ``sigma_v_ref`` [kPa] (the oedometer convention; default the material's e0 at
+    p'0), and a vertical overconsolidation ratio ``ocr``.
+    """
 
     pore_pressure: float | str = 0.0
+    stress: str = "uniform"
+    surcharge: float = 0.0
+    k0: float | str = "nc"
+    e_ref: float | None = None
+    sigma_v_ref: float | None = None
+    ocr: float = 1.0
+
+    def to_dict(self):
+        """The ``[initial]`` table: the geostatic keys only with a geostatic start."""
+        if self.stress == "uniform":
+            return {"pore_pressure": self.pore_pressure}
+        return {k: v for k, v in asdict(self).items() if v is not None}
 
 
 @dataclass(frozen=True)
@@ -377,6 +442,7 @@ class Case:
     efg: EFGSettings = field(default_factory=EFGSettings)
     diagnostics: Diagnostics = Diagnostics()
     fem: FEMSettings = FEMSettings()
+    gravity: Gravity = Gravity()
 
     def exact_solution(self):
         """``points -> (u, stress)`` of the ``[exact]`` solution, or None (soil.analytical)."""
@@ -495,8 +561,10 @@ class Case:
             "name": self.name, "description": self.description, "analysis": self.analysis,
             "geometry": asdict(self.geometry),
             "discretisation": self.discretisation.to_dict(),
-            "material": {**dict(self.material_spec), **asdict(self.fluid)},
-            "initial": asdict(self.initial),
+            "material": {**dict(self.material_spec),
+                         **{k: v for k, v in asdict(self.fluid).items() if v is not None}},
+            "initial": self.initial.to_dict(),
+            "gravity": asdict(self.gravity),
             "boundary": {name: edge.to_dict() for name, edge in self.boundary.items()},
             "loading": asdict(self.loading),
             "time": time,

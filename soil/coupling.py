@@ -3,7 +3,7 @@
 The EFG and FEM solvers differ only in how they discretise a step (shape functions or
 bases, cells, assembly, essential conditions); everything around that is here:
 
-* :class:`Scales`: the initial total stress, the residual scales a step converges against
+* :class:`Scales`: the residual scales a step converges against
   and the rule that pins the mean pore pressure of a confined undrained body;
 * :func:`run`: the run template (timers, the march, the summary every result carries);
 * :func:`march`: the case's time levels, a failing level halved up to :data:`MAX_CUTS`
@@ -23,7 +23,8 @@ import pandas as pd
 from tqdm import tqdm
 
 from soil.errors import ConvergenceError
-from soil.kinematics import IDENTITY, invariants, strain_increment
+from soil.geostatic import buoyant_weight, initial_state
+from soil.kinematics import invariants, strain_increment
 from soil.linear import factorise, identity, must_refactorise
 from soil.quality import cell_quality
 from soil.results import Result
@@ -45,13 +46,11 @@ class Scales:
 
     Attributes
     ----------
-    sigma0 : ndarray, shape (4,)
-        Initial total stress ``sigma'_0 - alpha p_w0 I`` (tension positive).
     stress : float
-        Stress scale: the largest initial stress, edge traction or footing stress
-        (:func:`_footing_stresses`) [kPa].
+        Stress scale: the largest initial effective stress, edge traction, footing stress
+        (:func:`_footing_stresses`) or buoyant weight of the height [kPa].
     modulus : float
-        P-wave modulus ``K + 4G/3`` at the initial state [kPa].
+        P-wave modulus ``K + 4G/3`` of the initial state, the median over the nodes [kPa].
     h : float
         Smallest nodal spacing [m].
     pin_pressure : bool
@@ -59,14 +58,13 @@ class Scales:
         incompressible constituents: its pore pressure is defined up to a constant, and
         the solvers pin the mean change to zero.
     shear : float
-        Shear modulus G at the initial state [kPa].
+        Shear modulus G of the initial state, the median over the nodes [kPa].
 
     A step has converged when the displacement residual is below ``TOLERANCE x stress x
     h`` (force per unit thickness) and the continuity residual below ``TOLERANCE x
     stress x h^2 / modulus`` (volume per unit thickness).
     """
 
-    sigma0: np.ndarray
     stress: float
     modulus: float
     h: float
@@ -75,20 +73,22 @@ class Scales:
 
     @classmethod
     def of(cls, case, material):
-        stress, _ = material.initial_state(1)
-        sigma0 = stress[0] - case.fluid.biot_alpha * case.initial_pore_pressure * IDENTITY
+        effective, state = initial_state(case, material, case.nodes())
         edges = [edge for _, edge in case.boundary.items()]
         tractions = [abs(np.asarray(e.traction, float)).max() for e in edges
                      if e.traction != "exact"]
-        modulus = float(material.constrained_modulus())
+        p, _ = invariants(effective)
+        modulus = float(np.median(material.constrained_modulus(p, state["v"])))
         free = any({"free", "rigid"} & (kx | ky) for kx, ky in
                    (edge.kinds(case.edge_length(side)) for side, edge in case.boundary.items()))
         drained = any(e.drained or any(s.water == "drained" for s in e.segments)
                       for e in edges)
         pin = case.fluid.storage == 0 and not free and not drained
-        return cls(sigma0, max([abs(stress[0]).max(), *tractions,
-                                *_footing_stresses(case, modulus), 1e-12]),
-                   modulus, float(min(case.spacing)), pin, float(material.moduli()[1]))
+        weight = buoyant_weight(case, state["v"]).max() * case.geometry.height
+        return cls(max([abs(effective).max(), *tractions, weight,
+                        *_footing_stresses(case, modulus), 1e-12]),
+                   modulus, float(min(case.spacing)), pin,
+                   float(np.median(material.moduli(p, state["v"])[1])))
 
     @property
     def perturbation(self):
@@ -326,7 +326,8 @@ def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, 
     dict
         ``time``, ``eps_a`` (:func:`axial_strain`), ``p`` and ``q`` (domain averages of
         p', q [kPa]), ``err`` (:func:`stretching_error`), ``gamma`` (mean horizontal
-        displacement of the top over the height), ``dt``, ``iterations``, ``substeps``,
+        displacement of the top over the height), ``settlement`` (mean
+        downward displacement of the top edge's nodes [m]), ``dt``, ``iterations``, ``substeps``,
         ``residual``, ``p_w@NAME`` per probe, if given, ``uniqueness`` and per segment
         ``settlement@NAME`` and ``pressure@NAME`` (:func:`segment_columns`); with
         ``cells``, ``min_angle`` [degrees] and ``min_quality`` (the worst cell's
@@ -346,6 +347,7 @@ def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, 
             "p": np.average(p, weights=weights), "q": np.average(q, weights=weights),
             "err": stretching_error(case, stretching[:, 1], weights),
             "gamma": np.mean(top[:, 0] - top0[:, 0]) / case.geometry.height,
+            "settlement": -float(np.mean(top[:, 1] - top0[:, 1])),
             "dt": dt, "iterations": info["iterations"], "substeps": info["substeps"],
             "residual": info["residual"], **{f"p_w@{name}": v for name, v in probes},
             **({} if uniqueness is None else {"uniqueness": uniqueness}), **contact,

@@ -27,6 +27,10 @@ class LinearElastic(Material):
         Poisson ratio in (-1, 0.5).
     p0 : float
         Initial isotropic mean effective stress (compression positive; 0 by default).
+    e0 : float
+        Initial void ratio (1 by default); it sets the specific volume ``v = 1 + e`` of the
+        state, which only the weight under gravity and a void-ratio-dependent
+        permeability read.
 
     Examples
     --------
@@ -41,11 +45,13 @@ class LinearElastic(Material):
     E: float
     nu: float
     p0: float = 0.0
+    e0: float = 1.0
 
     def __post_init__(self):
         require(self.E > 0, f"material.E = {self.E} must be positive (Young's modulus)")
         require(-1.0 < self.nu < 0.5,
                 f"material.nu = {self.nu} must lie in (-1, 0.5): use a Poisson ratio such as 0.3")
+        require(self.e0 > 0, f"material.e0 = {self.e0} must be positive (void ratio)")
 
     @property
     def K(self):
@@ -69,14 +75,19 @@ class LinearElastic(Material):
         """Elastic tangent (4, 4) from Voigt strain ``(xx, yy, zz, 2xy)`` to stress."""
         return self.K * np.outer(IDENTITY, IDENTITY) + 2 * self.G * DEVIATORIC
 
+    def k0_nc(self):
+        """K0 of one-dimensional compression, ``nu / (1 - nu)``."""
+        return self.nu / (1 - self.nu)
+
     def admissible(self, stress, state):
         """Every stress is admissible: the state unchanged."""
         return state
 
     def initial_state(self, n, p=None):
-        """Isotropic stress ``-p I`` and the (volume-only) state for n points."""
+        """Isotropic stress ``-p I`` and the state ``{"v"}`` (specific volume ``1 + e0``)
+        for n points."""
         p = self.p0 if p is None else p
-        return -np.outer(np.broadcast_to(p, (n,)), IDENTITY), {"v": np.ones(n)}
+        return -np.outer(np.broadcast_to(p, (n,)), IDENTITY), {"v": np.full(n, 1 + self.e0)}
 
     def update(self, stress, state, dstrain, dspin):
         """Rotate, then add ``C : dstrain``; returns stress, state and the tangent."""

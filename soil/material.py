@@ -44,6 +44,11 @@ class Material(ABC):
         inside the yield surface."""
 
     @abstractmethod
+    def k0_nc(self):
+        """The ratio ``sigma'_h / sigma'_v`` of normally consolidated one-dimensional
+        compression (``initial.k0 = "nc"`` of a geostatic start, :mod:`soil.geostatic`)."""
+
+    @abstractmethod
     def moduli(self, p=None, v=None):
         """Bulk and shear moduli ``(K, G)`` at mean effective stress p' and specific
         volume v (default: the initial state), in the case's stress unit."""

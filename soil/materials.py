@@ -3,7 +3,7 @@
 A material table names a ``model`` (``original``, ``modified`` or ``elastic``), may
 start from a ``preset`` and overrides any of its entries. Cam-clay keys: ``lambda``,
 ``kappa``, ``M``, ``nu``, ``e0``, ``p0``, ``ocr``, ``G``; elastic keys: ``E``, ``nu``,
-``p0``. Unknown keys are an error.
+``p0``, ``e0``. Unknown keys are an error.
 """
 
 import tomllib
@@ -20,7 +20,7 @@ PRESETS = {
 
 _CAMCLAY_KEYS = {"lambda": "lam", "kappa": "kappa", "M": "M", "nu": "nu", "e0": "e0",
                  "p0": "p0", "ocr": "ocr", "G": "G"}
-_ELASTIC_KEYS = {"E": "E", "nu": "nu", "p0": "p0"}
+_ELASTIC_KEYS = {"E": "E", "nu": "nu", "p0": "p0", "e0": "e0"}
 
 
 def material_from_spec(spec):
@@ -30,10 +30,10 @@ def material_from_spec(spec):
     ----------
     spec : mapping
         ``model`` (default ``original``), optional ``preset`` and parameter keys.
-        Keys that describe the pore fluid (``permeability``, ``gamma_w``, ``biot_alpha``,
-        ``storage``) are ignored here; :mod:`soil.case` reads them. ``model =
+        Keys that describe the pore fluid and the weight (:data:`FLUID_KEYS`) are
+        ignored here; :mod:`soil.case` reads them. ``model =
         "elastic"`` with a Cam-clay preset is the linear elastic skeleton with the
-        preset's initial moduli (``K = v0 p'0 / kappa`` and its ``nu``) and its p'0, for
+        preset's initial moduli (``K = v0 p'0 / kappa`` and its ``nu``), p'0 and e0, for
         comparing a skeleton that cannot yield with the clay; explicit ``E``, ``nu`` or
         ``p0`` replace them.
 
@@ -78,11 +78,13 @@ def _initial_elasticity(clay):
     """``E``, ``nu`` and ``p0`` of a Cam-clay parameter set's initial elastic moduli."""
     K, G = CamClay(**{_CAMCLAY_KEYS[k]: v for k, v in clay.items()}).moduli()
     return {"E": float(9 * K * G / (3 * K + G)),
-            "nu": float((3 * K - 2 * G) / (2 * (3 * K + G))), "p0": clay["p0"]}
+            "nu": float((3 * K - 2 * G) / (2 * (3 * K + G))), "p0": clay["p0"],
+            "e0": clay["e0"]}
 
 
 #: Fluid keys that may sit in a material table; they belong to the coupled problem.
-FLUID_KEYS = ("permeability", "gamma_w", "biot_alpha", "storage")
+FLUID_KEYS = ("permeability", "gamma_w", "biot_alpha", "storage", "permeability_law",
+              "permeability_e", "permeability_ck", "specific_gravity")
 
 
 def load_material(name_or_path, **overrides):

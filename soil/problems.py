@@ -36,7 +36,7 @@ def builtin_cases():
     Examples
     --------
     >>> list(builtin_cases())[:3]
-    ['cantilever', 'mandel', 'patch-test']
+    ['cantilever', 'large-strain-column', 'mandel']
     """
     return {name: case_from_dict(_read_toml(entry, name))
             for name, entry in _builtin_files().items()}

@@ -108,6 +108,15 @@ def write_csv(frame, path):
     return path
 
 
+def permeability(case, v):
+    """``{"permeability": k}`` [m/s] at specific volumes v when k depends on the void
+    ratio (``material.permeability_law``), else ``{}``: the snapshot field."""
+    fluid = case.fluid
+    if fluid.permeability_law == "constant":
+        return {}
+    return {"permeability": fluid.mobility_at(v)[0] * fluid.gamma_w}
+
+
 @dataclass
 class Snapshot:
     """Fields at one output time: points (N, 2) [m] and named point arrays."""

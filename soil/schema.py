@@ -11,7 +11,8 @@ cases).
 Conventions: x to the right, y up, origin at the lower-left corner of the rectangle;
 stress and traction are tension positive (a traction ``[0, -1]`` on the top edge is a
 compressive load); pore water pressure p_w is compression positive;
-``sigma = sigma' - alpha p_w I``. No body forces.
+``sigma = sigma' - alpha p_w I``. Gravity (``[gravity]``) acts along -y; p_w is then the
+pore pressure in excess of hydrostatic, the water table at or above the top.
 
 Schema (every case has the same one; unknown keys are an error)::
 
@@ -48,10 +49,33 @@ Schema (every case has the same one; unknown keys are an error)::
     gamma_w = 9.81                    # unit weight of water [kN/m3] > 0
     biot_alpha = 1.0                  # Biot coefficient in (0, 1]
     storage = 0.0                     # S = 1/M_biot [1/kPa] >= 0
+    permeability_law = "constant"     # or "taylor": k = k_ref 10^((e - e_k)/C_k), or
+                                      # "kozeny-carman": k = k_ref (e^3/(1+e)) /
+                                      # (e_k^3/(1+e_k)); k_ref = permeability
+    permeability_e = 1.2              # e_k > 0 (required by taylor and kozeny-carman)
+    permeability_ck = 0.5             # C_k > 0 (required by taylor)
+    specific_gravity = 2.65           # Gs of the solids > 1: the saturated unit weight
+                                      # (Gs + e) gamma_w / (1 + e) under gravity
+
+    [gravity]                         # optional
+    g = 9.81                          # m/s2 >= 0 along -y (default 0: weightless); the
+                                      # buoyant weight (Gs - 1) gamma_w (g / 9.81) / (1 + e)
+                                      # loads the skeleton (biot_alpha must be 1)
 
     [initial]                         # optional
     pore_pressure = "balance"         # a number (default 0) or "balance": p_w0 = -p'0/alpha,
                                       # total stress zero; sigma'0 = -p'0 I (material p0)
+    stress = "uniform"                # or "geostatic": sigma'v from the buoyant weight
+                                      # under the surcharge, sigma'h = k0 sigma'v, e from
+                                      # the compression line (soil.geostatic)
+    surcharge = 10.0                  # geostatic: kPa >= 0 on the top, in equilibrium at
+                                      # t = 0 (> 0 for Cam-clay: p' > 0 at the top)
+    k0 = "nc"                         # geostatic: in (0, 1], or "nc" (the material's
+                                      # normally consolidated value)
+    e_ref = 2.4                       # geostatic: void ratio > 0 on the normal compression
+    sigma_v_ref = 10.0                # line at this vertical effective stress [kPa] > 0
+                                      # (both or neither; default: e0 at p'0)
+    ocr = 1.0                         # geostatic: vertical overconsolidation ratio >= 1
 
     [boundary.left]                   # each of left, right, bottom, top exactly once
     ux = "fixed"                      # "free" (default), "fixed", "prescribed", "rigid"
@@ -206,15 +230,16 @@ import tomllib
 
 from soil.errors import require
 
-SECTIONS = ("geometry", "discretisation", "material", "initial", "boundary", "loading",
-            "time", "probes", "exact", "diagnostics", "efg", "fem")
+SECTIONS = ("geometry", "discretisation", "material", "initial", "gravity", "boundary",
+            "loading", "time", "probes", "exact", "diagnostics", "efg", "fem")
 """The sections of a case, besides the top-level keys ``name``, ``description`` and
 ``analysis``."""
 KEYS = {
     "geometry": ("shape", "width", "height"),
     "discretisation": ("nx", "ny", "x", "y", "layout", "jitter", "seed"),
     "diagnostics": ("uniqueness",),
-    "initial": ("pore_pressure",),
+    "initial": ("pore_pressure", "stress", "surcharge", "k0", "e_ref", "sigma_v_ref", "ocr"),
+    "gravity": ("g",),
     "edge": ("ux", "uy", "displacement", "traction", "water"),
     "segment": ("from", "to", "ux", "uy", "water", "settlement_rate", "force"),
     "loading": ("velocity_gradient", "load"),

@@ -14,9 +14,9 @@ import numpy as np
 
 from soil.analytical import exact_solution
 from soil.case import (ANALYSES, EDGES, KINDS, LAYOUTS, MAX_STEPS, ON_FAILURE,
-                       SEGMENT_KINDS, SEGMENT_TOLERANCE, WATER, Boundary, Case, Diagnostics,
-                       Discretisation, Edge, Fluid, Geometry, Initial, Loading, Probe,
-                       Segment, TimeStepping)
+                       PERMEABILITY_LAWS, SEGMENT_KINDS, SEGMENT_TOLERANCE, STRESS_STARTS,
+                       WATER, Boundary, Case, Diagnostics, Discretisation, Edge, Fluid,
+                       Geometry, Gravity, Initial, Loading, Probe, Segment, TimeStepping)
 from soil.errors import InputError, require
 from soil.materials import FLUID_KEYS, material_from_spec
 from soil.schema import (ASPECTS, GEOMETRIC, GRADINGS, KEYS, LENGTHS, MAX_TRIANGLE_ORDER,
@@ -70,11 +70,13 @@ def case_from_dict(data):
         efg=_efg(_section(data, "efg", {})),
         diagnostics=_diagnostics(_section(data, "diagnostics", {})),
         fem=_fem(_section(data, "fem", {})),
+        gravity=_gravity(_section(data, "gravity", {})),
     )
     _require_aspect(case)
     _require_exact_if_used(case)
     _require_coupled_footings(case)
     _require_segments_on_nodes(case)
+    _require_weight(case)
     case.times()
     return case
 
@@ -223,8 +225,10 @@ def _material(table):
         spec[key] = (_string(table, key, "material", None) if key in ("model", "preset")
                      else _number(table, key, "material"))
     material_from_spec(spec)
-    fluid = Fluid(**{key: _number(table, key, "material", getattr(Fluid, key))
-                     for key in FLUID_KEYS})
+    law = _string(table, "permeability_law", "material", "constant", PERMEABILITY_LAWS)
+    fluid = Fluid(**{key: _number(table, key, "material")
+                     for key in FLUID_KEYS if key in table and key != "permeability_law"},
+                  permeability_law=law)
     require(fluid.permeability >= 0, f"material.permeability = {fluid.permeability} must "
             "be >= 0 (m/s; 0 means undrained)")
     require(fluid.gamma_w > 0, f"material.gamma_w = {fluid.gamma_w} must be positive")
@@ -232,17 +236,83 @@ def _material(table):
             f"material.biot_alpha = {fluid.biot_alpha} must lie in (0, 1]")
     require(fluid.storage >= 0, f"material.storage = {fluid.storage} must be >= 0 "
             "(S = 1/M_biot; 0 for incompressible constituents)")
+    require(fluid.specific_gravity > 1, f"material.specific_gravity = "
+            f"{fluid.specific_gravity} must exceed 1 (solids heavier than water; 2.65 for "
+            "quartz)")
+    needs = {"constant": (), "taylor": ("permeability_e", "permeability_ck"),
+             "kozeny-carman": ("permeability_e",)}[law]
+    for key in needs:
+        require(getattr(fluid, key) is not None and getattr(fluid, key) > 0,
+                f"material.{key} = {getattr(fluid, key)} must be set and positive for "
+                f"permeability_law = {law!r}")
     return tuple(sorted(spec.items())), fluid
+
+
+def _gravity(table):
+    _check_keys(table, KEYS["gravity"], "gravity")
+    g = _number(table, "g", "gravity", 0.0)
+    require(g >= 0, f"gravity.g = {g} must be >= 0 (m/s2, acting along -y)")
+    return Gravity(g)
 
 
 def _initial(table):
     _check_keys(table, KEYS["initial"], "initial")
     value = table.get("pore_pressure", 0.0)
-    if value == "balance":
-        return Initial("balance")
-    require(not isinstance(value, str), f"initial.pore_pressure = {value!r} must be a "
-            "number or \"balance\"")
-    return Initial(_number(table, "pore_pressure", "initial", 0.0))
+    if value != "balance":
+        require(not isinstance(value, str), f"initial.pore_pressure = {value!r} must be a "
+                "number or \"balance\"")
+        value = _number(table, "pore_pressure", "initial", 0.0)
+    start = _string(table, "stress", "initial", "uniform", STRESS_STARTS)
+    geostatic = ("surcharge", "k0", "e_ref", "sigma_v_ref", "ocr")
+    if start == "uniform":
+        given = [key for key in geostatic if key in table]
+        require(not given, f"initial.{', '.join(given)} only apply to initial.stress = "
+                "\"geostatic\": set it, or remove them")
+        return Initial(value)
+    require(value != "balance", "initial.pore_pressure = \"balance\" sets the total stress "
+            "to zero, which a geostatic start does not have: give a number (default 0)")
+    k0 = table.get("k0", "nc")
+    if k0 != "nc":
+        require(not isinstance(k0, str), f"initial.k0 = {k0!r} must be a number in (0, 1] "
+                "or \"nc\"")
+        k0 = _number(table, "k0", "initial")
+        require(0 < k0 <= 1, f"initial.k0 = {k0} must lie in (0, 1] (or \"nc\": the "
+                "material's normally consolidated value)")
+    require(("e_ref" in table) == ("sigma_v_ref" in table), "initial.e_ref and "
+            "initial.sigma_v_ref anchor the compression line together: set both or neither")
+    e_ref = sigma_ref = None
+    if "e_ref" in table:
+        e_ref = _number(table, "e_ref", "initial")
+        sigma_ref = _number(table, "sigma_v_ref", "initial")
+        require(e_ref > 0, f"initial.e_ref = {e_ref} must be positive (a void ratio)")
+        require(sigma_ref > 0, f"initial.sigma_v_ref = {sigma_ref} must be positive (kPa, "
+                "compression positive)")
+    surcharge = _number(table, "surcharge", "initial", 0.0)
+    require(surcharge >= 0, f"initial.surcharge = {surcharge} must be >= 0 (kPa, "
+            "compression positive)")
+    ocr = _number(table, "ocr", "initial", 1.0)
+    require(ocr >= 1, f"initial.ocr = {ocr} must be at least 1")
+    return Initial(value, start, surcharge, k0, e_ref, sigma_ref, ocr)
+
+
+def _require_weight(case):
+    """Gravity needs alpha = 1 (p_w in excess of hydrostatic, buoyancy of the skeleton);
+    a geostatic Cam-clay start needs a surcharge (p' > 0 at the top)."""
+    if case.gravity.g > 0:
+        require(case.fluid.biot_alpha == 1, f"material.biot_alpha = "
+                f"{case.fluid.biot_alpha} must be 1 with gravity: the skeleton carries its "
+                "buoyant weight, which holds for incompressible grains")
+    if case.initial.stress == "geostatic":
+        require(case.analysis == "coupled", "initial.stress = \"geostatic\" needs analysis "
+                "= \"coupled\"")
+        plastic = case.material().plastic
+        require(case.initial.surcharge > 0 or not plastic,
+                "initial.surcharge must be > 0 with a Cam-clay geostatic start: p' would be "
+                "0 at the top surface (use e.g. 1 kPa)")
+        given = [k for k in ("e_ref", "ocr") if getattr(case.initial, k) not in (None, 1.0)]
+        require(plastic or not given, f"initial.{', '.join(given)} describe a compression "
+                "line, which a linear elastic skeleton does not have: remove them (its "
+                "void ratio is material.e0)")
 
 
 def _boundary(table, loading, geometry):

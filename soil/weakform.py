@@ -4,11 +4,15 @@ Both solvers discretise the same two equations on the start-of-step configuratio
 (updated Lagrangian, backward Euler), for the displacement increment
 ``du`` (``F = I + grad_n(du)``, ``J = det F``) and the pore pressure ``p`` at t_(n+1):
 
-* momentum, ``int grad_n(v) : J sigma F^-T dOmega_n`` (minus the external work), with
-  ``sigma = sigma' - alpha p I`` (tension positive, p compression positive);
+* momentum, ``int grad_n(v) : J sigma F^-T dOmega_n + int v_y gamma'_n dOmega_n`` (minus
+  the boundary's external work), with ``sigma = sigma' - alpha p I`` (tension positive,
+  p compression positive) and ``gamma'_n`` the buoyant weight per start-of-step volume
+  under gravity (:func:`soil.geostatic.buoyant_weight`, a dead load on x_n);
 * continuity, ``-int q [alpha (J - 1) + S (p - p_n)] dOmega_n - int grad(q) . [dt (k /
   gamma_w) grad(p) + beta grad(p - p_n)] dOmega_n`` (Darcy flux ``-(k/gamma_w) grad p``;
-  ``beta`` the optional pressure stabilisation of :mod:`fem_reference.solver`).
+  k at the void ratio of ``v = v_n J`` (:meth:`soil.case.Fluid.mobility_at`), so the
+  flux depends on the deformation; ``beta`` the optional pressure stabilisation of
+  :mod:`fem_reference.solver`).
 
 The other pressure stabilisation, the polynomial pressure projection of Dohrmann and
 Bochev (2004), is not an integrand at points but a form over cells: ``-tau int (dp -
@@ -34,7 +38,8 @@ def total_stress(effective, p, fluid):
     return effective - fluid.biot_alpha * np.asarray(p)[:, None] * IDENTITY
 
 
-def residual(total, J, Finv, w, p, p_n, grad_p, fluid, dt, beta=0.0, grad_p_n=None):
+def residual(total, J, Finv, w, p, p_n, grad_p, fluid, dt, beta=0.0, grad_p_n=None,
+             v_n=1.0, weight=0.0):
     """Residual coefficients ``r[m, f, s]``, (M, 3, 3).
 
     Parameters
@@ -50,32 +55,41 @@ def residual(total, J, Finv, w, p, p_n, grad_p, fluid, dt, beta=0.0, grad_p_n=No
     grad_p : ndarray, shape (M, 2)
         Gradient of p on x_n [kPa/m]; ``grad_p_n`` that of p_n (needed when beta > 0).
     fluid : Fluid
-        Biot alpha, storage S [1/kPa], mobility k/gamma_w [m2/(kPa s)].
+        Biot alpha, storage S [1/kPa], mobility k/gamma_w [m2/(kPa s)] and its law.
     dt : float
         Time step [s].
     beta : float
         Pressure stabilisation [m2/kPa] (0: none).
+    v_n : float or ndarray, shape (M,)
+        Specific volume ``1 + e`` at t_n (read by a void-ratio-dependent permeability).
+    weight : float or ndarray, shape (M,)
+        Buoyant unit weight gamma'_n at t_n [kN/m3] (0 without gravity).
     """
     r = np.zeros((len(w), 3, 3))
     r[:, :2, 1:] = (w * J)[:, None, None] * in_plane(total) @ np.swapaxes(Finv, 1, 2)
+    r[:, 1, 0] = w * weight
     r[:, 2, 0] = -w * (fluid.biot_alpha * (J - 1) + fluid.storage * (p - p_n))
-    flux = dt * fluid.mobility * grad_p
+    mobility, _ = fluid.mobility_at(v_n * J)
+    flux = dt * mobility[:, None] * grad_p
     if beta:
         flux = flux + beta * (grad_p - grad_p_n)
     r[:, 2, 1:] = -w[:, None] * flux
     return r
 
 
-def tangent(C, effective, total, J, Finv, w, fluid, dt, beta=0.0):
+def tangent(C, effective, total, J, Finv, w, fluid, dt, beta=0.0, v_n=1.0, grad_p=None):
     """Tangent coefficients ``c[m, f, s, g, t]``, (M, 3, 3, 3, 3).
 
     The momentum block is :func:`soil.kinematics.spatial_tangent` (material tangent C,
     Jaumann rotation of sigma', change of area and orientation) pulled back to x_n
     gradients; the coupling ``-alpha J F^-T``; storage ``-S`` and flow ``-(dt k/gamma_w +
-    beta)``. Arguments as in :func:`residual`, with C the material's consistent tangent
-    (M, 4, 4) and ``effective`` the effective stress (M, 4). The one approximation: the
-    Jaumann rotation acts on sigma' at t_(n+1) rather than on the rotated start-of-step
-    stress, a difference of the order of the strain increment.
+    beta)``; with a void-ratio-dependent k, the flux's change with the deformation
+    through ``dk/dv v_n dJ``, ``dJ = J F^-T : d grad_n(du)`` (``grad_p`` then needed).
+    The buoyant weight is a dead load on x_n and adds nothing. Arguments as in
+    :func:`residual`, with C the material's consistent tangent (M, 4, 4) and
+    ``effective`` the effective stress (M, 4). The one approximation: the Jaumann
+    rotation acts on sigma' at t_(n+1) rather than on the rotated start-of-step stress, a
+    difference of the order of the strain increment.
     """
     wJ = w * J
     A = spatial_tangent(C, in_plane(effective), in_plane(total))
@@ -84,7 +98,12 @@ def tangent(C, effective, total, J, Finv, w, fluid, dt, beta=0.0):
     c[:, :2, 1:, 2, 0] = -fluid.biot_alpha * wJ[:, None, None] * np.swapaxes(Finv, 1, 2)
     c[:, 2, 0, :2, 1:] = c[:, :2, 1:, 2, 0]
     c[:, 2, 0, 2, 0] = -fluid.storage * w
-    c[:, 2, 1, 2, 1] = c[:, 2, 2, 2, 2] = -(dt * fluid.mobility + beta) * w
+    mobility, slope = fluid.mobility_at(v_n * J)
+    c[:, 2, 1, 2, 1] = c[:, 2, 2, 2, 2] = -(dt * mobility + beta) * w
+    if slope.any():
+        dflux = (dt * w * slope * v_n * J)[:, None, None, None] * (
+            grad_p[:, :, None, None] * np.swapaxes(Finv, 1, 2)[:, None])
+        c[:, 2, 1:, :2, 1:] = -dflux
     return c
 
 

@@ -27,9 +27,9 @@ BUILTIN = builtin_cases()
 def test_builtins_are_the_case_files_by_name():
     assert Path(str(files("cases"))).resolve() == CASES
     assert list(BUILTIN) == sorted(p.stem for p in CASES.glob("*.toml")) == [
-        "cantilever", "mandel", "patch-test", "rough-compression", "simple-shear",
-        "soil-column", "strip-footing", "strip-footing-consolidation", "terzaghi",
-        "unconfined-compression"]
+        "cantilever", "large-strain-column", "mandel", "patch-test", "rough-compression",
+        "self-weight-consolidation", "simple-shear", "soil-column", "strip-footing",
+        "strip-footing-consolidation", "terzaghi", "unconfined-compression"]
 
 
 @pytest.mark.parametrize("name", list(BUILTIN))

@@ -54,3 +54,43 @@ def test_tangent_is_the_derivative_of_the_residual(size):
         scale = np.abs(c).max()
         tol = 1e-7 if g == 2 else 10 * size
         np.testing.assert_allclose(c[:, :, g, t], numeric, atol=tol * scale)
+
+
+@pytest.mark.parametrize("law", ["taylor", "kozeny-carman"])
+def test_flux_tangent_follows_the_void_ratio(law):
+    """With k = k(e), the flux rows' derivative in grad u (through ``v = v_n J``) is exact
+    in :func:`soil.weakform.tangent`: central differences to 1e-7; and the buoyant weight
+    is a dead load (the momentum rows' value slot is ``w gamma'``, with no tangent)."""
+    fluid = Fluid(permeability=1e-4, gamma_w=10.0, permeability_law=law,
+                  permeability_e=0.9, permeability_ck=0.4)
+    material = LinearElastic(E=1000.0, nu=0.3, p0=5.0)
+    stress0, st = material.initial_state(1)
+    v_n, w, weight = np.array([1.8]), np.array([0.7]), 8.0
+    rng = np.random.default_rng(2)
+    H0, p, grad_p = 1e-2 * rng.normal(size=(2, 2)), 2.5, np.array([[0.5, 0.2]])
+
+    def coefficients(H):
+        F = np.eye(2) + H
+        J = np.array([np.linalg.det(F)])
+        Finv = np.linalg.inv(F)[None]
+        deps, dw = strain_increment(H[None], J)
+        stress, _, C = material.update(stress0, st, deps, dw)
+        total = weakform.total_stress(stress, np.array([p]), fluid)
+        r = weakform.residual(total, J, Finv, w, np.array([p]), np.array([2.0]), grad_p,
+                              fluid, DT, v_n=v_n, weight=weight)
+        c = weakform.tangent(C, stress, total, J, Finv, w, fluid, DT, v_n=v_n,
+                             grad_p=grad_p)
+        return r[0], c[0]
+
+    r0, c = coefficients(H0)
+    assert r0[1, 0] == pytest.approx(0.7 * weight) and r0[0, 0] == 0
+    h = 1e-7
+    for g in range(2):
+        for t in range(2):
+            dH = np.zeros((2, 2))
+            dH[g, t] = h
+            numeric = (coefficients(H0 + dH)[0] - coefficients(H0 - dH)[0]) / (2 * h)
+            scale = np.abs(c[2, 1:, :2, 1:]).max()
+            assert scale > 0
+            np.testing.assert_allclose(c[2, 1:, g, t + 1], numeric[2, 1:], atol=1e-7 * scale)
+            assert numeric[1, 0] == pytest.approx(0.0, abs=1e-9)
