@@ -1,6 +1,7 @@
 """Gravity, the geostatic start and void-ratio-dependent permeability (soil.geostatic),
 in both solvers, against closed forms and Gibson's finite-strain reference."""
 
+import meshio
 import numpy as np
 import pytest
 
@@ -128,11 +129,19 @@ def test_weightless_layer_loaded_by_gravity_settles_to_the_static_solution(metho
 
 
 @pytest.mark.parametrize("method", ["fem-th", "efg"])
-def test_large_strain_column_ends_at_gibsons_settlement(method):
+def test_large_strain_column_ends_at_gibsons_settlement(method, tmp_path):
     """The built-in large-strain column, in 30 coarse steps: the final settlement (23 %
-    of the height) within 1 % of Gibson's (soil.gibson, converged to 1e-4)."""
+    of the height) within 1 % of Gibson's (soil.gibson, converged to 1e-4); the VTU
+    fields carry Taylor's k of each node's void ratio."""
     case = load_case("large-strain-column", overrides=["time.growth=1.6"])
-    history = _solve(case, method).history
+    result = _solve(case, method)
     column = gibson.large_strain_column(load=((0.0, 20.0), (1e6, 200.0)))
     reference = gibson.solve(column, [case.time.end], cells=400).settlement[-1]
-    assert history["settlement"].iloc[-1] == pytest.approx(reference, rel=1e-2)
+    assert result.history["settlement"].iloc[-1] == pytest.approx(reference, rel=1e-2)
+    result.write(tmp_path / "out")
+    last = sorted((tmp_path / "out").glob("fields_*.vtu"))[-1]
+    data = meshio.read(last).point_data
+    e = data["v"] - 1
+    np.testing.assert_allclose(data["permeability"], 1e-9 * 10 ** ((e - 2.4) / 1.2),
+                               rtol=1e-12)
+    assert data["permeability"].max() < 0.5e-9        # compressed: k fell
