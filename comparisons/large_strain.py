@@ -227,8 +227,7 @@ def _top_stress(case):
     """The effective stress [kPa] at the top of Gibson's deposited column: its
     compression line's at the deposit's void ratio."""
     ref = column(case)
-    clay = ref.clay
-    return float(clay.sigma_v_ref * np.exp((clay.e_ref - ref.e_deposited) / clay.lam))
+    return float(ref.clay.virgin_stress(ref.e_deposited))
 
 
 def _excess_scale(ref):
