@@ -43,6 +43,10 @@ Constants = namedtuple("Constants", "modified M lam kappa MD")
 #: Status of a point after the return mapping.
 CONVERGED, NOT_CONVERGED, SINGULAR = 0, 1, 2
 
+#: The local problem a point solves: elastic (dgamma = 0), plastic on the smooth surface,
+#: plastic on the vertex q = 0 of the original surface.
+ELASTIC, SMOOTH, VERTEX = 0, 1, 2
+
 #: numba options of every function here: division by zero gives inf or nan (a diverging
 #: iteration ends in a status, not an exception inside numba).
 jit = numba.njit(cache=True, error_model="numpy")
@@ -493,22 +497,22 @@ def _point(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter, x, work, stress
     vbar, dvbar = mean_volume(v_n, dev)
     scale = 1.0 / pc_n**2
     p_tr = p_n * math.exp(-vbar * dev / c.kappa)
-    plastic = yield_function(c, p_tr, q_tr, pc_n, scale)[0] > tol
+    kind = SMOOTH if yield_function(c, p_tr, q_tr, pc_n, scale)[0] > tol else ELASTIC
     x[0], x[1], x[2], x[3] = math.log(p_tr), q_tr, math.log(pc_n), 0.0
     known = (math.log(p_n), p_n, math.log(pc_n), q_tr, dev, vbar, dvbar, G, scale)
-    status = _newton(c, x, plastic, False, known, tol, max_iter, work)
-    vertex = status == CONVERGED and plastic and not c.modified and x[1] < 0
-    if vertex:  # returns past the apex land on the vertex q = 0
-        x[1] = 0.0
-        status = _newton(c, x, plastic, True, known, tol, max_iter, work)
-    if status == CONVERGED and not _stress_and_tangent(c, x, vertex, known, s_tr, work,
+    while True:  # one call site: numba compiles _newton once, for any kind
+        status = _newton(c, x, kind, known, tol, max_iter, work)
+        if status != CONVERGED or kind != SMOOTH or c.modified or x[1] >= 0:
+            break
+        kind, x[1] = VERTEX, 0.0  # returns past the apex land on the vertex q = 0
+    if status == CONVERGED and not _stress_and_tangent(c, x, kind, known, s_tr, work,
                                                        stress, tangent):
         status = SINGULAR
     return status, math.exp(x[2])
 
 
 @jit
-def _newton(c, x, plastic, vertex, known, tol, max_iter, work):
+def _newton(c, x, kind, known, tol, max_iter, work):
     """Newton on ``R(x) = 0`` from x (updated in place), steps of ln p' and ln p'c
     clipped to +-0.5; J and ``dR/dy`` in ``work`` are left at the solution.
 
@@ -517,13 +521,12 @@ def _newton(c, x, plastic, vertex, known, tol, max_iter, work):
     """
     R, J, _, lu, piv = work
     for _ in range(max_iter):
-        _residual(c, x, plastic, vertex, known, work)
+        _residual(c, x, kind, known, work)
         if _largest(R) < tol:
             return CONVERGED
         if not np.isfinite(_largest(R)):
             return NOT_CONVERGED
-        lu[:] = J
-        if not _lu_factor(lu, piv):
+        if not _lu_factor(J, lu, piv):
             return SINGULAR
         for k in range(4):
             R[k] = -R[k]
@@ -547,24 +550,24 @@ def _largest(R):
 
 
 @jit
-def _residual(c, x, plastic, vertex, known, work):
-    """Local residual R, its Jacobian J and its derivative with respect to (dev, q_tr),
-    into ``work``."""
+def _residual(c, x, kind, known, work):
+    """Local residual R of a point's problem ``kind``, its Jacobian J and its derivative
+    with respect to (dev, q_tr), into ``work``."""
     R, J, dRdy = work[0], work[1], work[2]
     ln_p_n, p_n, ln_pc_n, q_tr, dev, vbar, dvbar, G, scale = known
     p, q, pc, dg = math.exp(x[0]), x[1], math.exp(x[2]), x[3]
     f, fp, fq, fpc, fpp, fpq, fqq, fppc = yield_function(c, p, q, pc, scale)
     a = vbar / c.kappa
     theta, dtheta_dv = hardening(c, vbar)
-    J[:] = 0.0
-    dRdy[:] = 0.0
+    J.fill(0.0)
+    dRdy.fill(0.0)
     # volumetric elasticity: ln p = ln p_n - (vbar/kappa)(dev - deps_v^p)
     R[0] = x[0] - ln_p_n + a * (dev + dg * fp)
     J[0, 0], J[0, 1], J[0, 2], J[0, 3] = (1 + a * dg * fpp * p, a * dg * fpq,
                                           a * dg * fppc * pc, a * fp)
     dRdy[0, 0] = (vbar + dvbar * (dev + dg * fp)) / c.kappa
     # deviatoric radial return: q = q_tr - 3 G dg f_q (or q = 0 on the vertex)
-    if vertex:
+    if kind == VERTEX:
         R[1], J[1, 1] = q / p_n, 1.0 / p_n
     else:
         R[1] = (q - q_tr + 3 * G * dg * fq) / p_n
@@ -577,14 +580,14 @@ def _residual(c, x, plastic, vertex, known, work):
                                           1 - theta * dg * fppc * pc, -theta * fp)
     dRdy[2, 0] = -dtheta_dv * dvbar * dg * fp
     # consistency f = 0 on plastic points, dgamma = 0 on elastic ones
-    if plastic:
+    if kind != ELASTIC:
         R[3], J[3, 0], J[3, 1], J[3, 2] = f, fp * p, fq, fpc * pc
     else:
         R[3], J[3, 3] = dg, 1.0
 
 
 @jit
-def _stress_and_tangent(c, x, vertex, known, s_tr, work, stress, tangent):
+def _stress_and_tangent(c, x, kind, known, s_tr, work, stress, tangent):
     """Stress (4,) and consistent tangent (4, 4) at the solution x of a point; False
     when its local Jacobian is singular.
 
@@ -592,21 +595,21 @@ def _stress_and_tangent(c, x, vertex, known, s_tr, work, stress, tangent):
     ``d dev / d eps = m`` and ``d q_tr / d eps = 3 G n``, n the unit trial direction.
     """
     R, _, dRdy, lu, piv = work
-    lu[:] = work[1]
-    if not _lu_factor(lu, piv):
+    if not _lu_factor(work[1], lu, piv):
         return False
     for k in range(2):                      # dRdy becomes dx/dy
         for i in range(4):
             R[i] = -dRdy[i, k]
         _lu_solve(lu, piv, R)
-        dRdy[:, k] = R
+        for i in range(4):
+            dRdy[i, k] = R[i]
     _, p_n, _, q_tr, _, _, _, G, scale = known
     p, q, pc, dg = math.exp(x[0]), x[1], math.exp(x[2]), x[3]
     safe = q_tr > 1e-14 * p_n
     inv_q = 1.0 / q_tr if safe else 0.0     # n = s_tr / q_tr, zero at q_tr = 0
     if safe:
         ratio = q / q_tr
-    elif vertex:
+    elif kind == VERTEX:
         ratio = 0.0
     else:
         ratio = 1.0 / (1.0 + 3 * G * dg * yield_function(c, p, q, pc, scale)[6])
@@ -622,9 +625,12 @@ def _stress_and_tangent(c, x, vertex, known, s_tr, work, stress, tangent):
 
 
 @jit
-def _lu_factor(A, piv):
-    """LU factors of a 4 x 4 matrix with partial pivoting, in place; False at a zero
+def _lu_factor(J, A, piv):
+    """LU factors of a 4 x 4 matrix J into A, with partial pivoting; False at a zero
     pivot (exactly singular, as LAPACK's getrf reports)."""
+    for i in range(4):
+        for j in range(4):
+            A[i, j] = J[i, j]
     for k in range(4):
         m = k
         for i in range(k + 1, 4):

@@ -170,3 +170,57 @@ def _mean_volume(v, dev):
     dvbar = np.where(small, v * (0.5 + dev / 3 + dev**2 / 8),
                      v * (x * np.exp(x) - np.expm1(x)) / x**2)
     return vbar, dvbar
+
+
+# -- inputs to compare the kernel with the oracle on -------------------------------------
+#: Uniform numbers in [0, 1) that :func:`admissible_points` reads per point.
+UNIFORMS = 15
+
+
+def admissible_points(clay, u, largest=0.02):
+    """Admissible states and increments of points, each drawn from a row of uniform
+    numbers (a numpy generator's or hypothesis's, which then shrinks towards zeros).
+
+    Parameters
+    ----------
+    clay : CamClay
+    u : ndarray, shape (n, UNIFORMS)
+        Numbers in [0, 1].
+    largest : float
+        Largest strain increment (Euclidean norm of the Voigt vector).
+
+    Returns
+    -------
+    stress, state, dstrain, dspin
+        Arguments of ``update(clay, ...)``: p' log-uniform in [0.2, 5] p'0 and a random
+        deviatoric direction with ``q / p'`` uniform in [0, 1.5 M] (both sides of the
+        critical state); p'c puts half the points on the yield surface and the others
+        inside it (up to four times its size); v uniform in [1.4, 2.4]. The strain
+        increment has a random direction and a size log-uniform in [1e-6, largest]; a
+        quarter of the points start near the p' axis (``q / p' < 0.05``) and are
+        compressed nearly isotropically, which takes the original model to its vertex.
+        Spin increment uniform in [-0.1, 0.1].
+    """
+    u = np.atleast_2d(u)
+    near_axis = u[:, 0] < 0.25
+    p = clay.p0 * 0.2 * 25.0 ** u[:, 1]
+    eta = np.where(near_axis, 0.05, 1.5 * clay.M) * u[:, 2]
+    stress = _unit_deviator(2 * u[:, 3:7] - 1) * (eta * p)[:, None] - p[:, None] * IDENTITY
+    inside = np.where(u[:, 7] < 0.5, 1.0, 1.0 + 6.0 * (u[:, 7] - 0.5))
+    state = {"pc": clay.size(p, eta * p) * inside, "v": 1.4 + u[:, 8]}
+    size = 1e-6 * (largest / 1e-6) ** u[:, 9]
+    direction = 2 * u[:, 10:14] - 1
+    direction[near_axis, :3] = -1.0 + 0.1 * direction[near_axis, :3]
+    direction[near_axis, 3] = 0.0
+    direction[np.all(direction == 0, axis=1)] = (1.0, 0.0, 0.0, 0.0)
+    dstrain = size[:, None] * direction / np.linalg.norm(direction, axis=1)[:, None]
+    return stress, state, dstrain, 0.2 * u[:, 14] - 0.1
+
+
+def _unit_deviator(a):
+    """The deviators of rows a (n, 4) scaled to q = 1; ``(1, -1, 0, 0) / sqrt(3)`` for
+    an isotropic row."""
+    s = deviator(a)
+    q = invariants(s)[1]
+    s[q == 0] = np.array([1.0, -1.0, 0.0, 0.0]) / np.sqrt(3)
+    return s / np.where(q == 0, 1.0, q)[:, None]

@@ -1,0 +1,165 @@
+"""Time Cam-clay's numba return mapping against the numpy oracle, and measure their agreement.
+
+Not a test (pytest collects only ``test_*.py``): a script for issue 17's numbers. From the
+repository root::
+
+    PYTHONPATH=. python tests/camclay_speed.py                  # 6e5 points, both models
+    PYTHONPATH=. python tests/camclay_speed.py --points 100000 --repeat 5
+    PYTHONPATH=. python tests/camclay_speed.py --first-call     # compile and cache load
+
+For each model it draws admissible points (:func:`camclay_oracle.admissible_points`, strain
+increments up to 2 %: elastic, hardening and softening returns, the original model's
+vertex), then times ``CamClay.update`` (numba kernel) and ``camclay_oracle.update`` (numpy),
+interleaved, best of ``--repeat``, in one process, so that the ratio is what counts on a
+shared machine. It also times the kernel alone, serial and with ``prange`` over two
+chunks per thread (``parallel=True``, a variant defined here from the package's own
+per-point function), and reports the largest differences of kernel and oracle: stress
+over the start-of-step p', tangent over its Frobenius norm, p'c relative.
+
+``--first-call`` runs a fresh interpreter twice: with an empty numba cache (compilation)
+and with the package's cache (loading), timing the import and the first ``update``.
+"""
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numba
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+import camclay_oracle as oracle  # noqa: E402
+from soil import camclay  # noqa: E402
+from soil.camclay import CamClay  # noqa: E402
+from soil.kinematics import (DEVIATORIC, deviator, double_dot, hughes_winget,  # noqa: E402
+                             invariants)
+
+
+def table1(model):
+    """The paper's Table 1 clay."""
+    return CamClay(lam=0.11, kappa=0.04, M=1.42, nu=0.333, e0=0.83, p0=3.0, model=model)
+
+
+@numba.njit(parallel=True, error_model="numpy")
+def return_mapping_parallel(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter):
+    """``camclay._return_mapping`` with ``prange`` over chunks, each with its own scratch."""
+    n = len(p_n)
+    stress, pc, tangent = np.empty((n, 4)), np.empty(n), np.empty((n, 4, 4))
+    status = np.empty(n, np.int8)
+    chunks = 2 * numba.get_num_threads()
+    for k in numba.prange(chunks):
+        x, work = np.empty(4), camclay._workspace()
+        for i in range(k * n // chunks, (k + 1) * n // chunks):
+            status[i], pc[i] = camclay._point(c, s_tr[i], q_tr[i], p_n[i], pc_n[i], v_n[i],
+                                              dev[i], G[i], tol, max_iter, x, work,
+                                              stress[i], tangent[i])
+    return stress, pc, tangent, status
+
+
+def kernel_arguments(clay, stress, state, dstrain, dspin):
+    """The arguments ``CamClay.update`` hands to the kernel (its numpy part)."""
+    stress = hughes_winget(stress, dspin)
+    p_n, _ = invariants(stress)
+    _, G = clay.moduli(p_n, state["v"])
+    s_tr = deviator(stress) + 2 * G[:, None] * (dstrain @ DEVIATORIC.T)
+    q_tr = np.sqrt(1.5 * double_dot(s_tr, s_tr))
+    return (clay.constants, s_tr, q_tr, p_n, state["pc"], state["v"],
+            dstrain[:, :3].sum(axis=1), G, 1e-11, 60)
+
+
+def best(calls, repeat):
+    """Best time [s] of each call over ``repeat`` interleaved rounds, and the last results."""
+    times, results = [np.inf] * len(calls), [None] * len(calls)
+    for _ in range(repeat):
+        for k, call in enumerate(calls):
+            start = time.perf_counter()
+            results[k] = call()
+            times[k] = min(times[k], time.perf_counter() - start)
+    return times, results
+
+
+def agreement(points, kernel, numpy):
+    """Largest differences of the kernel's (stress, state, tangent) from the oracle's."""
+    p_n = invariants(hughes_winget(points[0], points[3]))[0]
+    norm = np.linalg.norm(numpy[2], axis=(1, 2))
+    return {"stress / p'_n": (np.abs(kernel[0] - numpy[0]).max(axis=1) / p_n).max(),
+            "tangent / |C|": (np.linalg.norm(kernel[2] - numpy[2], axis=(1, 2)) / norm).max(),
+            "p'c rel": np.abs(kernel[1]["pc"] / numpy[1]["pc"] - 1).max()}
+
+
+def kinds(points, result):
+    """Counts of elastic, hardening, softening and vertex returns."""
+    pc_n, pc = points[1]["pc"], result[1]["pc"]
+    q = invariants(result[0])[1]
+    return {"elastic": int(np.sum(pc == pc_n)), "hardening": int(np.sum(pc > pc_n)),
+            "softening": int(np.sum(pc < pc_n)), "vertex": int(np.sum((q == 0) & (pc != pc_n)))}
+
+
+def compare(model, n, repeat, seed):
+    """Print timings and agreement of one model at n points."""
+    clay = table1(model)
+    points = oracle.admissible_points(clay, np.random.default_rng(seed).random(
+        (n, oracle.UNIFORMS)))
+    args = kernel_arguments(clay, *points)
+    camclay._return_mapping(*(a[:10] if isinstance(a, np.ndarray) else a for a in args))
+    return_mapping_parallel(*(a[:10] if isinstance(a, np.ndarray) else a for a in args))
+    (t_kernel, t_numpy, t_serial, t_parallel), (kernel, numpy, serial, parallel) = best(
+        [lambda: clay.update(*points), lambda: oracle.update(clay, *points),
+         lambda: camclay._return_mapping(*args), lambda: return_mapping_parallel(*args)],
+        repeat)
+    assert all(np.array_equal(serial[k], parallel[k]) for k in range(4))
+    print(f"{model}, {n} points, best of {repeat}, {numba.get_num_threads()} numba threads")
+    print(f"  update: numba {t_kernel:.3f} s, numpy oracle {t_numpy:.3f} s, "
+          f"ratio {t_numpy / t_kernel:.1f}")
+    print(f"  kernel alone: serial {t_serial:.3f} s, prange {t_parallel:.3f} s "
+          f"(serial / prange {t_serial / t_parallel:.2f}); numpy part of update "
+          f"{t_kernel - t_serial:.3f} s")
+    print("  largest differences:", ", ".join(f"{k} {v:.2e}"
+                                              for k, v in agreement(points, kernel, numpy).items()))
+    print("  returns:", kinds(points, numpy))
+
+
+FIRST_CALL = """
+import time; start = time.perf_counter()
+import numpy as np
+from soil.camclay import CamClay
+clay = CamClay(lam=0.11, kappa=0.04, M=1.42, nu=0.333, e0=0.83, p0=3.0)
+imported = time.perf_counter()
+stress, state = clay.initial_state(10)
+clay.update(stress, state, np.full((10, 4), 1e-3), np.zeros(10))
+print(f"import {imported - start:.2f} s, first update {time.perf_counter() - imported:.2f} s")
+"""
+
+
+def first_call():
+    """Time import and first update in fresh interpreters: cold numba cache, then warm."""
+    with tempfile.TemporaryDirectory() as empty:
+        for label, env in (("empty cache (compiles)", {"NUMBA_CACHE_DIR": empty}),
+                           ("cache written above (loads)", {"NUMBA_CACHE_DIR": empty})):
+            out = subprocess.run([sys.executable, "-c", FIRST_CALL], capture_output=True,
+                                 text=True, check=True, env={**os.environ, **env})
+            print(f"{label}: {out.stdout.strip()}")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--points", type=int, default=600_000)
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--seed", type=int, default=17)
+    parser.add_argument("--models", nargs="+", default=["original", "modified"])
+    parser.add_argument("--first-call", action="store_true")
+    options = parser.parse_args()
+    if options.first_call:
+        first_call()
+        return
+    for model in options.models:
+        compare(model, options.points, options.repeat, options.seed)
+
+
+if __name__ == "__main__":
+    main()
