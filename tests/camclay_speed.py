@@ -11,13 +11,15 @@ For each model it draws admissible points (:func:`camclay_oracle.admissible_poin
 increments up to 2 %: elastic, hardening and softening returns, the original model's
 vertex), then times ``CamClay.update`` (numba kernel) and ``camclay_oracle.update`` (numpy),
 interleaved, best of ``--repeat``, in one process, so that the ratio is what counts on a
-shared machine. It also times the kernel alone, serial and with ``prange`` over two
+shared machine (wall-clock and CPU time). It also times the numpy part of ``update``
+(rotation, elastic trial) and the kernel alone, serial and with ``prange`` over two
 chunks per thread (``parallel=True``, a variant defined here from the package's own
 per-point function), and reports the largest differences of kernel and oracle: stress
 over the start-of-step p', tangent over its Frobenius norm, p'c relative.
 
-``--first-call`` runs a fresh interpreter twice: with an empty numba cache (compilation)
-and with the package's cache (loading), timing the import and the first ``update``.
+``--first-call`` runs a fresh interpreter twice, timing the import and the first
+``update``: with an empty numba cache (compilation), then with the cache that run wrote
+(loading).
 """
 
 import argparse
@@ -73,14 +75,18 @@ def kernel_arguments(clay, stress, state, dstrain, dspin):
 
 
 def best(calls, repeat):
-    """Best time [s] of each call over ``repeat`` interleaved rounds, and the last results."""
-    times, results = [np.inf] * len(calls), [None] * len(calls)
+    """Best wall-clock and best CPU time [s] of each call over ``repeat`` interleaved
+    rounds, and the last results. CPU time is what a serial call costs whatever else the
+    machine runs; wall time is what ``prange`` can shorten."""
+    wall, cpu = [np.inf] * len(calls), [np.inf] * len(calls)
+    results = [None] * len(calls)
     for _ in range(repeat):
         for k, call in enumerate(calls):
-            start = time.perf_counter()
+            start, start_cpu = time.perf_counter(), time.process_time()
             results[k] = call()
-            times[k] = min(times[k], time.perf_counter() - start)
-    return times, results
+            cpu[k] = min(cpu[k], time.process_time() - start_cpu)
+            wall[k] = min(wall[k], time.perf_counter() - start)
+    return wall, cpu, results
 
 
 def agreement(points, kernel, numpy):
@@ -108,19 +114,20 @@ def compare(model, n, repeat, seed):
     args = kernel_arguments(clay, *points)
     camclay._return_mapping(*(a[:10] if isinstance(a, np.ndarray) else a for a in args))
     return_mapping_parallel(*(a[:10] if isinstance(a, np.ndarray) else a for a in args))
-    (t_kernel, t_numpy, t_serial, t_parallel), (kernel, numpy, serial, parallel) = best(
+    wall, cpu, (kernel, numpy, _, serial, parallel) = best(
         [lambda: clay.update(*points), lambda: oracle.update(clay, *points),
-         lambda: camclay._return_mapping(*args), lambda: return_mapping_parallel(*args)],
-        repeat)
+         lambda: kernel_arguments(clay, *points), lambda: camclay._return_mapping(*args),
+         lambda: return_mapping_parallel(*args)], repeat)
     assert all(np.array_equal(serial[k], parallel[k]) for k in range(4))
-    print(f"{model}, {n} points, best of {repeat}, {numba.get_num_threads()} numba threads")
-    print(f"  update: numba {t_kernel:.3f} s, numpy oracle {t_numpy:.3f} s, "
-          f"ratio {t_numpy / t_kernel:.1f}")
-    print(f"  kernel alone: serial {t_serial:.3f} s, prange {t_parallel:.3f} s "
-          f"(serial / prange {t_serial / t_parallel:.2f}); numpy part of update "
-          f"{t_kernel - t_serial:.3f} s")
-    print("  largest differences:", ", ".join(f"{k} {v:.2e}"
-                                              for k, v in agreement(points, kernel, numpy).items()))
+    print(f"{model}, {n} points, best of {repeat}, {numba.get_num_threads()} numba threads; "
+          "seconds wall (cpu)")
+    for k, label in enumerate(["update (numba kernel)", "numpy oracle", "  numpy part of update",
+                               "  kernel, serial", "  kernel, prange"]):
+        print(f"  {label:24s} {wall[k]:7.3f} ({cpu[k]:7.3f})")
+    print(f"  oracle / update: wall {wall[1] / wall[0]:.1f}, cpu {cpu[1] / cpu[0]:.1f}; "
+          f"serial / prange wall {wall[3] / wall[4]:.2f}")
+    differences = agreement(points, kernel, numpy)
+    print("  largest differences:", ", ".join(f"{k} {v:.2e}" for k, v in differences.items()))
     print("  returns:", kinds(points, numpy))
 
 
