@@ -24,13 +24,13 @@ over the start-of-step p', tangent over its Frobenius norm, p'c relative.
 Measured on the 2-core development machine while it ran other jobs (load 7 to 11), 6e5
 points, numba 0.68.1, numpy 2.4: ``update`` took 1.24 s of CPU (original) and 1.33 s
 (modified) against the oracle's 8.96 s and 7.03 s, ratios 7.2 and 5.3 (wall-clock 8.0
-and 5.4; an earlier run gave 7.8 and 6.6); of the 1.24 s, 0.81 s is the kernel and 0.27 s
-the numpy rotation and trial. Largest differences: stress 2.5e-11 p'_n, tangent 1.5e-9
-of its norm (original; 3.6e-11 modified), p'c 1.9e-11. ``prange`` on two threads gave
-serial / prange wall-clock ratios of 0.84, 0.87 and 0.90 (original) and 0.94, 1.19 and
-1.54 (modified) in three runs: no gain that one can rely on while the cores are shared,
-so the package's kernel is serial. First call: 8.0 s of CPU to compile with an empty
-cache, 0.6 s to load from it.
+and 5.4; two earlier runs gave 7.8 and 9.2 for the original, 6.6 and 4.6 for the
+modified); of the 1.24 s, 0.81 s is the kernel and 0.27 s the numpy rotation and trial.
+Largest differences: stress 2.5e-11 p'_n, tangent 1.5e-9 of its norm (original; 3.6e-11
+modified), p'c 1.9e-11. ``prange`` on two threads gave serial / prange wall-clock ratios
+of 0.84, 0.87 and 0.90 (original) and 0.94, 1.19 and 1.54 (modified) in three runs: no
+gain that one can rely on while the cores are shared, so the package's kernel is serial.
+First call: 8.0 s of CPU to compile with an empty cache, 0.6 s to load from it.
 """
 
 import argparse
