@@ -455,8 +455,9 @@ def _return_mapping(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter):
     s_tr : ndarray, shape (N, 4)
         Trial deviatoric stress (tension positive, ``(xx, yy, zz, xy)``).
     q_tr, p_n, pc_n, v_n, dev, G : ndarray, shape (N,)
-        Trial q, p' and p'c at the start of the step, specific volume, volumetric strain
-        increment (tension positive) and shear modulus (start of step).
+        Trial q; p', p'c (compression positive) and specific volume at the start of the
+        step; volumetric strain increment (extension positive); shear modulus at the
+        start of the step. Stresses and G in the case's stress unit.
     tol : float
         Tolerance on the scaled local residual.
     max_iter : int
