@@ -43,6 +43,39 @@ def test_saddle_point_solve(monkeypatch, name):
         assert np.abs(K @ x - b).max() < 1e-9 * np.abs(b).max()
 
 
+def unsymmetric_saddle(skew, n=40, seed=0):
+    """:func:`saddle` plus ``skew`` times a random skew-symmetric matrix (same pattern)."""
+    K, groups, b = saddle(n, seed)
+    M = K.copy()
+    M.data = np.random.default_rng(seed + 2).uniform(-1.0, 1.0, M.nnz)
+    return (K + skew * (M - M.T)).tocsr(), groups, b
+
+
+@pytest.mark.skipif(not PARDISO, reason="pypardiso is not installed (soilwater[fast])")
+@pytest.mark.parametrize("node_blocked", [False, True])
+def test_symmetric_factorisation_solves_sym_K(monkeypatch, node_blocked):
+    """PARDISO's LDL^T of sym(K) solves the symmetric saddle point (zero pressure block)
+    to 1e-9, and an unsymmetric K through its symmetric part, not through K."""
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "pardiso")
+    for skew in (0.0, 0.5):
+        K, groups, b = unsymmetric_saddle(skew)
+        lu = factorise(K, groups=groups if node_blocked else None, symmetric=True)
+        x = lu.solve(b)
+        S = (K + K.T) / 2
+        assert lu.symmetric
+        assert np.abs(S @ x - b).max() < 1e-9 * np.abs(b).max()
+        if skew:
+            assert np.abs(K @ x - b).max() > 1e-3 * np.abs(b).max()
+
+
+def test_superlu_factorises_K_when_asked_for_sym_K(monkeypatch):
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "superlu")
+    K, _, b = unsymmetric_saddle(0.5)
+    lu = factorise(K, symmetric=True)
+    assert not lu.symmetric
+    assert np.abs(K @ lu.solve(b) - b).max() < 1e-9 * np.abs(b).max()
+
+
 def test_singular_tangent_is_a_convergence_error(monkeypatch):
     monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "superlu")
     with pytest.raises(ConvergenceError, match="singular"):
