@@ -8,6 +8,7 @@ import scipy.sparse as sp
 
 import efg.solver
 import fem_reference.solver
+from soil.coupling import TIMERS, new_counts, newton
 from soil.errors import ConvergenceError, InputError
 from soil.linear import backend, factorise
 from soil.problems import load_case
@@ -74,6 +75,40 @@ def test_superlu_factorises_K_when_asked_for_sym_K(monkeypatch):
     lu = factorise(K, symmetric=True)
     assert not lu.symmetric
     assert np.abs(K @ lu.solve(b) - b).max() < 1e-9 * np.abs(b).max()
+
+
+class Linear:
+    """Newton system ``R(x) = K x - b`` (:func:`soil.coupling.newton`)."""
+
+    def __init__(self, K, groups, b):
+        self.K, self.groups, self.b, self.x = K, groups, b, np.zeros(len(b))
+
+    def residual(self):
+        R = self.K @ self.x - self.b
+        return R, np.abs(R).max() / np.abs(self.b).max()
+
+    def tangent(self):
+        return self.K
+
+    def advance(self, dx):
+        self.x = self.x + dx
+
+
+@pytest.mark.parametrize("name", ["superlu", "pardiso"])
+@pytest.mark.parametrize("skew", [0.0, 0.5])
+def test_newton_falls_back_to_K_when_sym_K_stalls(monkeypatch, name, skew):
+    """The first factorisation is of sym(K) (PARDISO); with a strongly unsymmetric K its
+    correction does not contract, and Newton converges on the factorisation of K."""
+    if name == "pardiso" and not PARDISO:
+        pytest.skip("pypardiso is not installed (extra soilwater[fast])")
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", name)
+    system = Linear(*unsymmetric_saddle(skew))
+    stats = {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
+    newton(system, stats)
+    symmetric = int(name == "pardiso")
+    assert stats["symmetric_factorisations"] == symmetric
+    assert stats["factorisations"] - stats["symmetric_factorisations"] == (
+        1 if skew or not symmetric else 0)
 
 
 def test_singular_tangent_is_a_convergence_error(monkeypatch):
