@@ -9,8 +9,7 @@ bases, cells, assembly, essential conditions); everything around that is here:
 * :func:`march`: the case's time levels, a failing level halved up to :data:`MAX_CUTS`
   times;
 * :func:`newton`: Newton's method on one step, reusing a factorisation while it
-  contracts (:func:`soil.linear.must_refactorise`), the first one of the symmetric part
-  of the tangent (:data:`SYMMETRIC_FIRST`);
+  contracts (:func:`soil.linear.must_refactorise`);
 * :func:`material_update`: kinematics and the material's return mapping at the points;
 * :func:`history_row`: the columns of a history row.
 """
@@ -33,9 +32,10 @@ from soil.results import Result
 #: Newton tolerance on the scaled residuals (see :class:`Scales`).
 TOLERANCE = 1e-8
 MAX_ITERATIONS = 25
-#: The first factorisation of a step is the symmetric one of ``sym(K)``
-#: (:func:`soil.linear.factorise`), every refactorisation the unsymmetric one of ``K``.
-SYMMETRIC_FIRST = True
+#: Whether the first factorisation of a step is the symmetric one of ``sym(K)``
+#: (:func:`soil.linear.factorise`; every refactorisation is of ``K``). Off: the tangents
+#: are not symmetric enough for it to pay (README, "Speed").
+SYMMETRIC_FIRST = False
 #: Halvings of a failing time step before the run stops.
 MAX_CUTS = 6
 #: Phase timers of a run [s], ``summary["timings"]`` of both methods (plus ``total_s``):
@@ -187,11 +187,13 @@ def newton(system, stats):
 
     Modified Newton: a factorisation is kept while each iteration contracts the residual
     (:func:`soil.linear.must_refactorise`), and the current tangent is factorised
-    otherwise. With :data:`SYMMETRIC_FIRST` the first factorisation of the step is the
-    symmetric one of ``sym(K) = (K + K^T) / 2`` (about half the cost of ``K``'s on
-    PARDISO), kept while it contracts like any other; once a factorisation stalls, the
-    step refactorises the full unsymmetric ``K``. SuperLU has no symmetric mode: every
-    factorisation is of ``K``, as with ``SYMMETRIC_FIRST = False``.
+    otherwise. With :data:`SYMMETRIC_FIRST` (off by default) the first factorisation of
+    the step is the symmetric one of ``sym(K) = (K + K^T) / 2`` (half the factor of
+    ``K``'s on PARDISO), kept while it contracts like any other; once a factorisation
+    stalls, the step refactorises the full unsymmetric ``K``. The corrections of
+    ``sym(K)`` contract the residual at best by the spectral radius of
+    ``sym(K)^-1 (K - K^T) / 2``, those of ``K`` by the change of the tangent over the
+    step. SuperLU has no symmetric mode: every factorisation is of ``K``.
 
     Parameters
     ----------

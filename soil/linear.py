@@ -17,10 +17,11 @@ while it contracts the Newton residual at least :data:`CONTRACTION`-fold per ite
 ``factorise(K, groups, symmetric=True)`` asks for the cheaper symmetric factorisation of
 ``sym(K) = (K + K^T) / 2``, for a tangent that is nearly symmetric: PARDISO factorises
 its upper triangle as symmetric indefinite (``mtype = -2``, LDL^T with Bunch-Kaufman 1x1
-and 2x2 pivots), about half the factor entries and time of the LU of ``K``. Its solve is
-the solve of ``sym(K)``, so a Newton correction carries the error of the unsymmetric part
-and the modified Newton iteration (:func:`soil.coupling.newton`) falls back to ``K``
-itself when it stops contracting. SuperLU has no symmetric mode and factorises ``K``.
+and 2x2 pivots), half the factor entries of the LU of ``K``. Its solve is the solve of
+``sym(K)``, so a Newton correction carries the error of the unsymmetric part; the
+modified Newton iteration can start a step with it and falls back to ``K`` when it stops
+contracting (:data:`soil.coupling.SYMMETRIC_FIRST`, off: it does not pay on our
+tangents). SuperLU has no symmetric mode and factorises ``K``.
 """
 
 import os

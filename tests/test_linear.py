@@ -8,6 +8,7 @@ import scipy.sparse as sp
 
 import efg.solver
 import fem_reference.solver
+import soil.coupling
 from soil.coupling import TIMERS, new_counts, newton
 from soil.errors import ConvergenceError, InputError
 from soil.linear import backend, factorise
@@ -102,6 +103,7 @@ def test_newton_falls_back_to_K_when_sym_K_stalls(monkeypatch, name, skew):
     if name == "pardiso" and not PARDISO:
         pytest.skip("pypardiso is not installed (extra soilwater[fast])")
     monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", name)
+    monkeypatch.setattr(soil.coupling, "SYMMETRIC_FIRST", True)
     system = Linear(*unsymmetric_saddle(skew))
     stats = {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
     newton(system, stats)
@@ -138,12 +140,18 @@ def test_elastic_steps_reuse_one_factorisation(monkeypatch, solve):
 
 
 @pytest.mark.skipif(not PARDISO, reason="pypardiso is not installed (soilwater[fast])")
-def test_pardiso_and_superlu_give_the_same_steps(monkeypatch):
-    """Both back-ends converge to the same Newton tolerance: EFG Cam-clay paths agree."""
+@pytest.mark.parametrize("symmetric_first", [False, True])
+def test_pardiso_and_superlu_give_the_same_steps(monkeypatch, symmetric_first):
+    """Both back-ends converge to the same Newton tolerance: EFG Cam-clay paths agree,
+    PARDISO's first factorisation of a step of sym(K) or not."""
     runs = {}
     for name in ("superlu", "pardiso"):
         monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", name)
-        runs[name] = efg.solver.solve(compression(), progress=False).history
+        monkeypatch.setattr(soil.coupling, "SYMMETRIC_FIRST", symmetric_first)
+        result = efg.solver.solve(compression(), progress=False)
+        runs[name] = result.history
+    symmetric = result.summary["symmetric_factorisations"]
+    assert symmetric >= len(result.history) if symmetric_first else symmetric == 0
     for column in ("p", "q", "eps_a"):
         assert np.allclose(runs["pardiso"][column], runs["superlu"][column],
                            rtol=1e-7, atol=1e-9)
