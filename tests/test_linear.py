@@ -107,10 +107,9 @@ def test_newton_falls_back_to_K_when_sym_K_stalls(monkeypatch, name, skew):
     system = Linear(*unsymmetric_saddle(skew))
     stats = {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
     newton(system, stats)
-    symmetric = int(name == "pardiso")
+    symmetric, unsymmetric = {"superlu": (0, 1), "pardiso": (1, int(skew > 0))}[name]
     assert stats["symmetric_factorisations"] == symmetric
-    assert stats["factorisations"] - stats["symmetric_factorisations"] == (
-        1 if skew or not symmetric else 0)
+    assert stats["factorisations"] == symmetric + unsymmetric
 
 
 def test_singular_tangent_is_a_convergence_error(monkeypatch):
@@ -151,7 +150,10 @@ def test_pardiso_and_superlu_give_the_same_steps(monkeypatch, symmetric_first):
         result = efg.solver.solve(compression(), progress=False)
         runs[name] = result.history
     symmetric = result.summary["symmetric_factorisations"]
-    assert symmetric >= len(result.history) if symmetric_first else symmetric == 0
+    if symmetric_first:
+        assert symmetric >= len(result.history)      # one a step, more after a cut-back
+    else:
+        assert symmetric == 0
     for column in ("p", "q", "eps_a"):
         assert np.allclose(runs["pardiso"][column], runs["superlu"][column],
                            rtol=1e-7, atol=1e-9)
