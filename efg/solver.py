@@ -313,11 +313,10 @@ def _tangent(model, disc, stress, total, tangent, J, Finv, dt, alpha_u, alpha_p,
     bc = disc.bc
     coeff = weakform.tangent(tangent, stress, total, J, Finv, disc.w, model.case.fluid, dt,
                              model.beta, v_n, grad_p)
-    pen = np.zeros((len(disc.bp.weights), 3, 3, 3, 3))
     constrained = bc.constrained | np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
-    pen[:, :2, :, :2, :] = penalty_coefficients(disc.bp, constrained, alpha_u)
-    pen[:, 2, 0, 2, 0] = -alpha_p * disc.bp.weights * bc.drained
-    K = disc.tangent(coeff, pen)
+    penalty = penalty_coefficients(disc.bp, constrained, alpha_u).columns()
+    penalty[2, 0, 2, 0] = -alpha_p * disc.bp.weights * bc.drained
+    K = disc.tangent(coeff, weakform.Coefficients.of(penalty, (3, 3)))
     if not model.tau:
         return K
     n = disc.fluctuation.shape[0]
@@ -406,25 +405,27 @@ class _Discretisation:
         return {"uu": ((self.tu, self.su), (self.sub, self.sub)), "up": ((self.tu, self.sp),),
                 "pu": ((self.tp, self.su),), "pp": ((self.tp, self.sp), (self.spb, self.spb))}
 
-    def block(self, name, coeff, boundary):
+    def block(self, name, coeff, boundary=None):
         """One block's matrix from its domain (and boundary) coefficients."""
         pattern, pairs = self.patterns[name], self.blocks[name]
         values = None
         for (test, trial), c in zip(pairs, (coeff, boundary)):
             values = scatter(pattern, test, trial, c, values)
-        return pattern.matrix(values, coeff.shape[1], coeff.shape[3])
+        return pattern.matrix(values, *coeff.fields)
 
     def tangent(self, coeff, boundary):
-        """Tangent of ``(ux, uy, p_w)``, fields blocked, from the integrand coefficients at
-        the integration points (M, 3, 3, 3, 3) and the boundary points (G, 3, 3, 3, 3)."""
+        """Tangent of ``(ux, uy, p_w)``, fields blocked, from the integrand coefficients
+        (:class:`soil.weakform.Coefficients` of 3 x 3 fields) at the integration points and
+        at the boundary points; with separate u and p_w shape functions, each block takes
+        a copy of its own terms."""
         if self.shared:
             return self.block("domain", coeff, boundary)
-        u, p = slice(0, 2), slice(2, 3)
+        u, p = range(0, 2), range(2, 3)
         return sp.bmat([
-            [self.block("uu", coeff[:, u, :, u], boundary[:, u, :, u]),
-             self.block("up", coeff[:, u, :, p], None)],
-            [self.block("pu", coeff[:, p, :, u], None),
-             self.block("pp", coeff[:, p, :, p], boundary[:, p, :, p])]], format="csr")
+            [self.block("uu", coeff.block(u, u), boundary.block(u, u)),
+             self.block("up", coeff.block(u, p))],
+            [self.block("pu", coeff.block(p, u)),
+             self.block("pp", coeff.block(p, p), boundary.block(p, p))]], format="csr")
 
 
 @dataclass
