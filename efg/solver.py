@@ -39,7 +39,7 @@ to a constant: the mean change of p_w over the domain is then pinned to zero by 
 Lagrange multiplier.
 """
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cached_property, partial
 
 import numpy as np
@@ -224,7 +224,7 @@ class _System:
                               self.grad_p, fluid, self.dt, model.beta, self.grad_p_n,
                               self.state_n["v"], self.weight)
 
-        R_u = np.concatenate([_tested(disc.tu, r[:, f]) for f in range(2)])
+        R_u = np.concatenate([disc.tu.tested(r[:, f]) for f in range(2)])
         ub = disc.sub.phi @ self.du.reshape(2, n).T                          # (G, 2)
         self.gap = points.gap + ub - self.du_bar
         R_u += np.concatenate([disc.sub.phi.T @ (alpha_u * disc.bp.weights
@@ -234,7 +234,7 @@ class _System:
         R_u[n:] += disc.sub.phi.T @ (self.rigid_w * self.plate_gap)
         R_u -= np.concatenate([disc.sub.phi.T @ (disc.bp.weights * self.traction[:, f])
                                for f in range(2)])
-        R_p = _tested(disc.tp, r[:, 2])
+        R_p = disc.tp.tested(r[:, 2])
         if model.tau:
             R_p -= model.tau * (disc.fluctuation @ (self.p - points.p))
         pb = disc.spb.phi @ self.p
@@ -294,16 +294,6 @@ class _System:
                       plate_gap=np.where(disc.bc.rigid, self.plate_gap, 0.0),
                       probes=points.probes + at.probes.phi @ move,
                       stretching=deps / self.dt, reactions=reactions)
-
-
-def _tested(shape, r):
-    """``sum_s N_s^T r[:, s]`` over the test functions ``shape`` (slots value, d/dx, d/dy;
-    all-zero slots skipped)."""
-    out = np.zeros(shape.phi.shape[1])
-    for s, N in enumerate((shape.phi, shape.dphi_dx, shape.dphi_dy)):
-        if r[:, s].any():
-            out += N.T @ r[:, s]
-    return out
 
 
 def _tangent(model, disc, stress, total, tangent, J, Finv, dt, alpha_u, alpha_p, v_n,
@@ -471,7 +461,7 @@ def _discretise(model, nodes, evaluation, timings, quad=None):
             tp = tu if same else vci.corrected(sp_, quad.weights, spb, bp.weights, bp.normal)
         at = build(evaluation)
         n = len(nodes)
-        at_points = _AtPoints(_rows(at, slice(0, n)), _rows(at, slice(n, None)))
+        at_points = _AtPoints(at.subset(slice(0, n)), at.subset(slice(n, None)))
         disc = _Discretisation(quad.weights, su, sp_, tu, tp, bp, sub, spb,
                                conditions(case, bp, model.initial_bp), at_points, {},
                                quad.cell)
@@ -479,12 +469,6 @@ def _discretise(model, nodes, evaluation, timings, quad=None):
         disc.patterns.update({name: Pattern.build(*pairs)
                               for name, pairs in disc.blocks.items()})
     return disc
-
-
-def _rows(shape, rows):
-    """The shape functions at a slice of the evaluation points."""
-    return replace(shape, phi=shape.phi[rows], dphi_dx=shape.dphi_dx[rows],
-                   dphi_dy=shape.dphi_dy[rows], rcond=shape.rcond[rows])
 
 
 def _bordered(K, disc, n, rigid_w, c_mean, pin):

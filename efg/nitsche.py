@@ -1,0 +1,234 @@
+"""Nitsche's method: essential conditions that keep the EFG matrix well scaled.
+
+MLS shape functions do not interpolate, so EFG imposes ``u_f = u_bar_f`` on the constrained
+components f of a field weakly, at the boundary Gauss points (:mod:`efg.boundary`). The
+penalty adds ``alpha int v_f gap_f`` with alpha 10^6 times the stiffness scale: its error
+is of the order of 1/alpha, and the diagonal of the matrix spans 10^6, so that a Krylov
+solver's small relative residual says nothing about the interior. Nitsche (1971) adds
+instead, to the residual of every test function v, with ``gap = u^h - u_bar``:
+
+* consistency, ``-int v_f (s n)_f dGamma``, with s the weak form's flux (the coefficients
+  of grad v: the first Piola stress ``J sigma F^-T`` for momentum, ``-dt (k / gamma_w)
+  grad p`` for continuity; :mod:`soil.weakform`): the reaction is the flux that the
+  interior equations carry to the boundary, not a penalty force;
+* symmetry, ``-int gap_f (D grad v n)_f dGamma``, with a reference operator D frozen over
+  the step: at the reference state, the transpose of the consistency term;
+* stabilisation, ``beta int v_f gap_f dGamma``.
+
+All three vanish for the exact solution (zero gap, exact flux): the method is consistent
+for every beta, and its error is the discretisation's. With ``A(v) = int grad v : D :
+grad v dOmega`` and ``lambda`` the largest eigenvalue of ``int_Gamma |(D grad v n)_c|^2
+dGamma = lambda A(v)`` over the discrete functions (c the constrained components),
+Cauchy-Schwarz bounds the symmetric pair by ``2 sqrt(lambda A(v)) |v_c|_Gamma``, and
+``A - 2 sqrt(lambda A) |v_c| + beta |v_c|^2`` is positive definite in ``(sqrt(A), |v_c|)``
+for beta > lambda. ``beta = 2 lambda`` (:data:`SAFETY`) as Griebel and Schweitzer (2003, "A
+particle-partition of unity method part V: boundary conditions") choose it; lambda is
+estimated on the strip of nodes next to the constrained boundary (:func:`largest_eigenvalue`).
+
+Layout: the fields and slots of :mod:`soil.weakform` (value, d/dx, d/dy on x_n), at the
+boundary points with their line weights [m per unit thickness]. Signs: the continuity
+equation's operator is negative (``-dt k / gamma_w``), so its D and beta are negative and
+each term keeps the sign of its field's equations.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from efg.assembly import Pattern, elasticity_coefficients, scatter
+from soil.kinematics import DEVIATORIC, IDENTITY
+
+#: beta over the eigenvalue bound lambda (coercive for any factor above 1).
+SAFETY = 2.0
+#: Rings of neighbouring nodes added to those whose supports reach a constrained point, on
+#: which :func:`largest_eigenvalue` solves (the maximiser lives next to the boundary).
+RINGS = 2
+#: Constrained point components up to which the eigenvalue is found densely.
+DENSE = 400
+
+
+@dataclass(frozen=True)
+class Nitsche:
+    """The Nitsche terms of one configuration at the boundary points (F fields).
+
+    Attributes
+    ----------
+    normal : ndarray, shape (G, 2)
+        Unit outward normals on x_n.
+    weights : ndarray, shape (G,)
+        Line weights [m per unit thickness].
+    mask : ndarray of bool, shape (G, F)
+        The constrained components.
+    operator : ndarray, shape (G, F, F, 2)
+        ``T[g, h, f, l] = w_g mask[g, h] sum_k n_k D[g, h, k, f, l]``: the reference flux
+        of component h through the boundary per unit test gradient ``d v_f / d x_l``,
+        times the line weight.
+    beta : ndarray, shape (F,)
+        Stabilisation of each field [flux per unit of the field and per m: kPa/m for the
+        displacement, m/kPa for the pore pressure, whose beta is negative].
+    """
+
+    normal: np.ndarray
+    weights: np.ndarray
+    mask: np.ndarray
+    operator: np.ndarray
+    beta: np.ndarray
+
+    @classmethod
+    def build(cls, bpoints, mask, D, beta):
+        """Terms on :class:`efg.boundary.BoundaryPoints` ``bpoints`` with the constrained
+        components ``mask`` (G, F), the reference operator D (G, F, 2, F, 2) at the
+        points (:func:`flux_operator`) and the stabilisation ``beta`` (F,)."""
+        return cls(bpoints.normal, bpoints.weights, np.asarray(mask, bool),
+                   flux_operator(bpoints, mask, D), np.asarray(beta, float))
+
+    def reaction(self, flux, gap):
+        """The force the support exerts on the body at each point, (G, F): ``w (s n -
+        beta gap)`` on constrained components (s n the weak form's flux through the
+        boundary; for the displacement a force per unit thickness, y up positive).
+
+        Parameters
+        ----------
+        flux : ndarray, shape (G, F, 3)
+            The weak form's residual coefficients at the boundary points, line weights
+            included (:func:`soil.weakform.residual`; the gradient slots are read).
+        gap : ndarray, shape (G, F)
+            ``u^h - u_bar`` per component (read where constrained).
+        """
+        through = np.einsum("gk,gfk->gf", self.normal, flux[:, :self.beta.size, 1:])
+        return self.mask * (through - self.beta * self.weights[:, None] * gap)
+
+    def residual(self, flux, gap):
+        """Residual coefficients (G, F, 3) of the three terms (arguments as
+        :meth:`reaction`)."""
+        r = np.zeros(gap.shape + (3,))
+        r[:, :, 0] = -self.reaction(flux, gap)
+        r[:, :, 1:] = -np.einsum("gh,ghfl->gfl", gap, self.operator)
+        return r
+
+    def tangent(self, c):
+        """Tangent coefficients (G, F, 3, Fs, 3) of the three terms, from the weak form's
+        tangent ``c`` (G, Fs, 3, Fs, 3) at the boundary points (its gradient rows are
+        read), the first F trial fields being the constrained ones."""
+        F = self.beta.size
+        out = np.zeros((len(c), F) + c.shape[2:])
+        through = np.einsum("gk,gfkht->gfht", self.normal, c[:, :F, 1:])
+        out[:, :, 0] = -(self.mask[:, :, None, None] * through)
+        out[:, :, 1:, :F, 0] = -np.moveaxis(self.operator, 1, 3)
+        diagonal = self.beta * self.weights[:, None] * self.mask
+        out[:, np.arange(F), 0, np.arange(F), 0] += diagonal
+        return out
+
+
+def flux_operator(bpoints, mask, D):
+    """``T[g, h, f, l] = w_g mask[g, h] sum_k n_k D[g, h, k, f, l]`` (G, F, F, 2), with
+    ``D[g, h, k, f, l] = d s_hk / d(d v_f / d x_l)`` the reference operator at the boundary
+    points ``bpoints`` (:class:`efg.boundary.BoundaryPoints`) and ``mask`` (G, F) the
+    constrained components."""
+    T = np.einsum("gk,ghkfl->ghfl", bpoints.normal, D)
+    return T * (bpoints.weights[:, None] * mask)[:, :, None, None]
+
+
+def isotropic(K, G):
+    """The operator ``D[p, f, k, g, l] = d sigma_fk / d(d u_g / d x_l)`` (P, 2, 2, 2, 2) of
+    isotropic plane-strain elasticity with bulk and shear moduli K, G (P,) [kPa]."""
+    C = (np.asarray(K)[:, None, None] * np.outer(IDENTITY, IDENTITY)
+         + 2 * np.asarray(G)[:, None, None] * DEVIATORIC)
+    return elasticity_coefficients(np.ones(len(C)), C)[:, :, 1:, :, 1:]
+
+
+def largest_eigenvalue(domain, boundary, rings=RINGS):
+    """Estimate of the largest lambda of ``sum_g w_g |(D grad v n)_c|^2 = lambda int grad v
+    : D : grad v dOmega`` [the operator's unit per m], the bound that fixes beta.
+
+    Solved as the largest eigenvalue of ``Q A^-1 Q^T`` (Lanczos; dense when small), Q the
+    boundary rows ``T grad v / sqrt(w)``, A the domain form, over the functions of the
+    nodes that reach a constrained point and ``rings`` rings of their neighbours (zero
+    elsewhere): a lower bound that grows to the exact lambda with the rings (the maximiser
+    decays away from the boundary; measured in :mod:`comparisons.essential`), which the
+    factor :data:`SAFETY` covers. A's null space (rigid motions, constants) carries no
+    boundary flux; a shift of 1e-10 of A's largest diagonal makes A regular there.
+
+    Parameters
+    ----------
+    domain : tuple
+        ``(shape, weights, D)``: trial functions at the domain integration points (plain
+        MLS gradients), their weights (M,) [m2 per unit thickness] and the positive
+        semi-definite operator D (M, F, 2, F, 2) there (that of the boundary terms, its
+        sign made positive).
+    boundary : tuple
+        ``(shape_b, weights_b, T)``: functions at the boundary points, their line weights
+        (G,) [m] and :attr:`Nitsche.operator` (G, F, F, 2) (its sign does not matter).
+    rings : int or None
+        Neighbour rings of the strip; None: every node (the exact lambda).
+
+    Returns
+    -------
+    float
+        0 when no boundary row carries a flux.
+    """
+    shape, weights, D = domain
+    Q = _boundary_rows(*boundary)
+    if Q.shape[0] == 0:
+        return 0.0
+    n, F = shape.phi.shape[1], D.shape[1]
+    nodes = _strip(shape, Q, rings)
+    dofs = (np.arange(F)[:, None] * n + nodes).ravel()
+    A = _domain_form(shape, weights, D, nodes)[dofs][:, dofs]
+    shift = 1e-10 * A.diagonal().max()
+    lu = spla.splu(sp.csc_matrix(A + shift * sp.identity(len(dofs))))
+    Q = Q[:, dofs].tocsr()
+    if Q.shape[0] <= DENSE:
+        S = Q @ lu.solve(Q.T.toarray())
+        return float(np.linalg.eigvalsh(0.5 * (S + S.T))[-1])
+    op = spla.LinearOperator((Q.shape[0],) * 2, dtype=float,
+                             matvec=lambda x: Q @ lu.solve(Q.T @ np.ravel(x)))
+    return float(spla.eigsh(op, k=1, which="LA", tol=1e-4, return_eigenvectors=False)[0])
+
+
+def _boundary_rows(shape_b, weights_b, T):
+    """Q (R, F n): per constrained component h at a point g, the row ``sum_l T[g, h, f,
+    l] dphi_l(x_g) / sqrt(w_g)`` in the columns ``(f, node)``; rows without flux dropped."""
+    F = T.shape[1]
+    scaled = T / np.sqrt(weights_b)[:, None, None, None]
+    dphi = (shape_b.dphi_dx, shape_b.dphi_dy)
+    Q = sp.bmat([[sum(sp.diags(scaled[:, h, f, l]) @ dphi[l] for l in range(2))
+                  for f in range(F)] for h in range(F)], format="csr")
+    Q.eliminate_zeros()
+    return Q[np.flatnonzero(np.diff(Q.indptr))]
+
+
+def _strip(shape, Q, rings):
+    """Nodes (sorted) whose functions enter Q, grown by ``rings`` rings of neighbours
+    (nodes that share an integration point); every node when ``rings`` is None."""
+    n = shape.phi.shape[1]
+    if rings is None:
+        return np.arange(n)
+    reached = np.zeros(n)
+    reached[np.unique(Q.indices % n)] = 1.0
+    incidence = _incidence(shape)
+    for _ in range(rings):
+        reached = incidence.T @ (incidence @ reached)
+    return np.flatnonzero(reached)
+
+
+def _domain_form(shape, weights, D, nodes):
+    """``int grad v : D : grad u dOmega`` (F n, F n), fields blocked, from the integration
+    points that see one of ``nodes`` (exact on their rows and columns)."""
+    seen = np.zeros(shape.phi.shape[1])
+    seen[nodes] = 1.0
+    rows = np.flatnonzero(_incidence(shape) @ seen)
+    part = shape.subset(rows)
+    F = D.shape[1]
+    coeff = np.zeros((len(rows), F, 3, F, 3))
+    coeff[:, :, 1:, :, 1:] = weights[rows, None, None, None, None] * D[rows]
+    pattern = Pattern.build((part, part))
+    return pattern.matrix(scatter(pattern, part, part, coeff), F, F).tocsr()
+
+
+def _incidence(shape):
+    """Point-node incidence (P, N) of the shape functions' pattern, ones."""
+    phi = shape.phi
+    return sp.csr_matrix((np.ones(phi.nnz), phi.indices, phi.indptr), shape=phi.shape)
