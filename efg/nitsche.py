@@ -45,8 +45,9 @@ SAFETY = 2.0
 #: Rings of neighbouring nodes added to those whose supports reach a constrained point, on
 #: which :func:`largest_eigenvalue` solves (the maximiser lives next to the boundary).
 RINGS = 2
-#: Constrained point components up to which the eigenvalue is found densely.
-DENSE = 400
+#: Boundary rows up to which the eigenvalue is found densely (Lanczos above: tens of
+#: back-solves instead of one per row).
+DENSE = 10
 
 
 @dataclass(frozen=True)
@@ -191,11 +192,17 @@ def largest_eigenvalue(domain, boundary, rings=RINGS):
 def _boundary_rows(shape_b, weights_b, T):
     """Q (R, F n): per constrained component h at a point g, the row ``sum_l T[g, h, f,
     l] dphi_l(x_g) / sqrt(w_g)`` in the columns ``(f, node)``; rows without flux dropped."""
-    F = T.shape[1]
-    scaled = T / np.sqrt(weights_b)[:, None, None, None]
-    dphi = (shape_b.dphi_dx, shape_b.dphi_dy)
-    Q = sp.bmat([[sum(sp.diags(scaled[:, h, f, l]) @ dphi[l] for l in range(2))
-                  for f in range(F)] for h in range(F)], format="csr")
+    G, F, n = T.shape[0], T.shape[1], shape_b.phi.shape[1]
+    point = np.repeat(np.arange(G), np.diff(shape_b.indptr))              # of each entry
+    scaled = (T / np.sqrt(weights_b)[:, None, None, None])[point]          # (nnz, h, f, l)
+    values = (scaled[..., 0] * shape_b.dphi_dx.data[:, None, None]
+              + scaled[..., 1] * shape_b.dphi_dy.data[:, None, None])     # (nnz, h, f)
+    h, f = np.meshgrid(np.arange(F), np.arange(F), indexing="ij")
+    rows = h[None] * G + point[:, None, None]
+    cols = f[None] * n + shape_b.indices[:, None, None]
+    Q = sp.csr_matrix((values.ravel(), (np.broadcast_to(rows, values.shape).ravel(),
+                                        np.broadcast_to(cols, values.shape).ravel())),
+                      shape=(F * G, F * n))
     Q.eliminate_zeros()
     return Q[np.flatnonzero(np.diff(Q.indptr))]
 

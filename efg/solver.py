@@ -39,13 +39,13 @@ to a constant: the mean change of p_w over the domain is then pinned to zero by 
 Lagrange multiplier.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property, partial
 
 import numpy as np
 import scipy.sparse as sp
 
-from efg import vci
+from efg import nitsche, vci
 from efg.quadrature import background
 from efg.assembly import Pattern, scatter
 from efg.boundary import (BOUNDARY_ORDER, boundary_points, conditions,
@@ -194,9 +194,13 @@ class _System:
         self.stress_n = su.phi @ points.stress
         self.state_n = {k: su.phi @ v for k, v in points.state.items()}
         self.p_n = disc.sp.phi @ points.p
-        self.grad_p_n = np.stack([disc.sp.dphi_dx @ points.p, disc.sp.dphi_dy @ points.p], 1)
+        self.grad_p_n = _pressure_gradient(disc.sp, points.p)
         self.du_bar = bc.target_increment(case.loading.L, disc.bp.points, self.dt)
         self.alpha_u, self.alpha_p = _penalties(model, [0.0, self.dt]).values()
+        self.nitsche = None
+        if case.efg.essential == "nitsche":
+            self.nitsche = _Nitsche(model, points, disc, self.dt,
+                                    (self.stress_n, self.state_n["v"]))
         self.weight = buoyant_weight(case, self.state_n["v"])
         self.traction = (cauchy_traction(model.sigma0_bp, disc.bp.normal)
                          + bc.traction * bc.loaded * case.loading.factor(t1))
@@ -212,33 +216,31 @@ class _System:
         """``[R_u, R_p, plate?, pin?]`` at the iterate and its scaled size beyond
         round-off."""
         model, points, disc, n = self.model, self.points, self.disc, self.n
-        bc, fluid, alpha_u = disc.bc, model.case.fluid, self.alpha_u
+        bc, fluid = disc.bc, model.case.fluid
         (self.stress, self.state, self.material_tangent, self.J, self.Finv,
          _) = material_update(model.material, self.stress_n, self.state_n,
                               _gradient(disc.su, self.du, n), self.timings,
                               "a background cell")
         p_q = disc.sp.phi @ self.p
         self.total = weakform.total_stress(self.stress, p_q, fluid)
-        self.grad_p = np.stack([disc.sp.dphi_dx @ self.p, disc.sp.dphi_dy @ self.p], 1)
+        self.grad_p = _pressure_gradient(disc.sp, self.p)
         r = weakform.residual(self.total, self.J, self.Finv, disc.w, p_q, self.p_n,
                               self.grad_p, fluid, self.dt, model.beta, self.grad_p_n,
                               self.state_n["v"], self.weight)
 
         R_u = np.concatenate([disc.tu.tested(r[:, f]) for f in range(2)])
+        R_p = disc.tp.tested(r[:, 2])
         ub = disc.sub.phi @ self.du.reshape(2, n).T                          # (G, 2)
         self.gap = points.gap + ub - self.du_bar
-        R_u += np.concatenate([disc.sub.phi.T @ (alpha_u * disc.bp.weights
-                                                  * bc.constrained[:, f] * self.gap[:, f])
-                               for f in range(2)])
+        self.gaps = np.column_stack([self.gap, disc.spb.phi @ self.p])      # (G, 3)
+        essential_u, essential_p = self._essential()
+        R_u, R_p = R_u + essential_u, R_p + essential_p
         self.plate_gap = points.plate_gap + ub[:, 1] - (self.plate - points.plate)
         R_u[n:] += disc.sub.phi.T @ (self.rigid_w * self.plate_gap)
         R_u -= np.concatenate([disc.sub.phi.T @ (disc.bp.weights * self.traction[:, f])
                                for f in range(2)])
-        R_p = disc.tp.tested(r[:, 2])
         if model.tau:
             R_p -= model.tau * (disc.fluctuation @ (self.p - points.p))
-        pb = disc.spb.phi @ self.p
-        R_p -= disc.spb.phi.T @ (self.alpha_p * disc.bp.weights * bc.drained * pb)
         extra_R = []
         if bc.rigid.any():
             extra_R.append(-np.sum(self.rigid_w * self.plate_gap) - self.plate_force)
@@ -247,18 +249,54 @@ class _System:
             R_p += self.c_mean * self.lam
             extra_R.append(self.c_mean @ (self.p - points.p))
         noise_u, noise_p, noise_plate = _roundoff(
-            disc, points, self.du.reshape(2, n).T, self.du_bar, self.p, self.plate, alpha_u,
-            self.alpha_p, self.rigid_w)
+            disc, points, self.du.reshape(2, n).T, self.du_bar, self.p, self.plate,
+            *self._factors, self.rigid_w)
         residual = max(_excess(R_u, noise_u) / sc.force, _excess(R_p, noise_p) / sc.volume,
                        _excess(extra_R[:1], noise_plate) / sc.force * bc.rigid.any(),
                        np.abs(extra_R[-1:]).max(initial=0) / sc.volume * sc.pin_pressure)
         return np.concatenate([R_u, R_p, extra_R]), residual
 
+    @property
+    def _factors(self):
+        """The coefficients of the essential conditions' gap forces, u [kPa/m] and p_w
+        [m/kPa]: the penalty factors, or Nitsche's stabilisation."""
+        if self.nitsche is None:
+            return self.alpha_u, self.alpha_p
+        return tuple(np.abs(self.nitsche.terms.beta[1:]))
+
+    def _essential(self):
+        """The essential conditions' rows of the residual, (2n,) and (n,): penalty forces
+        ``alpha w gap`` (p_w's with the continuity equation's sign) or Nitsche's terms."""
+        disc, bc, w = self.disc, self.disc.bc, self.disc.bp.weights
+        if self.nitsche is None:
+            r = np.zeros(self.gaps.shape + (3,))
+            r[:, :, 0] = w[:, None] * np.column_stack([self.alpha_u * bc.constrained,
+                                                       -self.alpha_p * bc.drained]) * self.gaps
+        else:
+            r = self.nitsche.residual(self.du, self.p, self.gaps, self.timings)
+        return (np.concatenate([disc.sub.tested(r[:, f]) for f in range(2)]),
+                disc.spb.tested(r[:, 2]))
+
+    def _essential_tangent(self):
+        """Boundary coefficients (G, 3, 3, 3, 3) of the essential conditions and of the
+        rigid plate (a penalty with either method)."""
+        bc, bp = self.disc.bc, self.disc.bp
+        rigid = np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
+        if self.nitsche is None:
+            coeff = np.zeros((len(bp.weights), 3, 3, 3, 3))
+            coeff[:, 2, 0, 2, 0] = -self.alpha_p * bp.weights * bc.drained
+            rigid = rigid | bc.constrained
+        else:
+            coeff = self.nitsche.tangent()
+        coeff[:, :2, :, :2, :] += penalty_coefficients(bp, rigid, self.alpha_u)
+        return coeff
+
     def domain_tangent(self):
-        """The tangent of ``(ux, uy, p_w)`` at the iterate, penalties included."""
+        """The tangent of ``(ux, uy, p_w)`` at the iterate, essential conditions
+        included."""
         return _tangent(self.model, self.disc, self.stress, self.total,
-                        self.material_tangent, self.J, self.Finv, self.dt, self.alpha_u,
-                        self.alpha_p, self.state_n["v"], self.grad_p)
+                        self.material_tangent, self.J, self.Finv, self.dt,
+                        self.state_n["v"], self.grad_p, self._essential_tangent())
 
     def tangent(self):
         """:meth:`domain_tangent` bordered by the plate and the pin, if any."""
@@ -283,8 +321,11 @@ class _System:
             _gradient(at.nodes, self.du, n), self.timings, "a node")
         move = self.du.reshape(2, n).T
         bc = disc.bc
-        force = -(self.alpha_u * disc.bp.weights * bc.constrained[:, 1] * self.gap[:, 1]
-                  + self.rigid_w * self.plate_gap)
+        if self.nitsche is None:
+            force = -self.alpha_u * disc.bp.weights * bc.constrained[:, 1] * self.gap[:, 1]
+        else:
+            force = self.nitsche.reaction(self.gaps)[:, 1]
+        force -= self.rigid_w * self.plate_gap
         on = bc.segment >= 0
         reactions = np.bincount(bc.segment[on], force[on],
                                 minlength=len(self.model.case.boundary.segments()))
@@ -296,18 +337,107 @@ class _System:
                       stretching=deps / self.dt, reactions=reactions)
 
 
-def _tangent(model, disc, stress, total, tangent, J, Finv, dt, alpha_u, alpha_p, v_n,
-             grad_p):
+class _Nitsche:
+    """Nitsche's method in one step (``efg.essential = "nitsche"``): the weak form at the
+    boundary points and the terms of :class:`efg.nitsche.Nitsche` on ``(ux, uy, p_w)``.
+
+    The boundary points take stress, state and p_w from the nodes as the integration
+    points do, and their material update gives the flux (first Piola stress ``J sigma
+    F^-T``, Darcy term) that the consistency term carries through the boundary. The
+    reference operators are frozen over the step: the isotropic elastic moduli of the
+    start-of-step state for u, ``-dt k/gamma_w`` at the start-of-step void ratio for p_w.
+    beta = :data:`efg.nitsche.SAFETY` x :func:`efg.nitsche.largest_eigenvalue` per field,
+    the bound of p_w taken with ``dt k/gamma_w + (S + alpha^2/M) h^2``, the scale of the
+    pressure penalty: with k = 0 (no flux, so no consistency or symmetric term) the
+    drained condition is then still held, by a weak penalty of about 2 lambda/M.
+    """
+
+    def __init__(self, model, points, disc, dt, domain):
+        sub, spb = disc.sub, disc.spb
+        self.model, self.disc, self.dt = model, disc, dt
+        self.stress_n = sub.phi @ points.stress
+        self.state_n = {k: sub.phi @ v for k, v in points.state.items()}
+        self.p_n = spb.phi @ points.p
+        self.grad_p_n = _pressure_gradient(spb, points.p)
+        self.terms = _nitsche_terms(model, disc, dt, domain,
+                                    (self.stress_n, self.state_n["v"]))
+
+    def residual(self, du, p, gaps, timings):
+        """Residual coefficients (G, 3, 3) of the iterate ``du``, ``p`` with the gaps
+        (G, 3) of ``(ux, uy, p_w)``."""
+        model, disc, fluid = self.model, self.disc, self.model.case.fluid
+        (self.stress, _, self.material_tangent, self.J, self.Finv,
+         _) = material_update(model.material, self.stress_n, self.state_n,
+                              _gradient(disc.sub, du, len(p)), timings, "a boundary point")
+        p_b = disc.spb.phi @ p
+        self.total = weakform.total_stress(self.stress, p_b, fluid)
+        self.grad_p = _pressure_gradient(disc.spb, p)
+        self.flux = weakform.residual(self.total, self.J, self.Finv, disc.bp.weights, p_b,
+                                      self.p_n, self.grad_p, fluid, self.dt, model.beta,
+                                      self.grad_p_n, self.state_n["v"])
+        return self.terms.residual(self.flux, gaps)
+
+    def tangent(self):
+        """Tangent coefficients (G, 3, 3, 3, 3) at the last :meth:`residual`."""
+        c = weakform.tangent(self.material_tangent, self.stress, self.total, self.J,
+                             self.Finv, self.disc.bp.weights, self.model.case.fluid,
+                             self.dt, self.model.beta, self.state_n["v"], self.grad_p)
+        return self.terms.tangent(c)
+
+    def reaction(self, gaps):
+        """Force of the support on the soil at each point (G, 3) at the last
+        :meth:`residual` (:meth:`efg.nitsche.Nitsche.reaction`)."""
+        return self.terms.reaction(self.flux, gaps)
+
+
+def _nitsche_terms(model, disc, dt, domain, boundary):
+    """:class:`efg.nitsche.Nitsche` of a step on ``(ux, uy, p_w)`` (see :class:`_Nitsche`);
+    ``domain`` and ``boundary`` are the start-of-step ``(stress, v)`` at the integration
+    and the boundary points."""
+    fluid, sc, bc, bp = model.case.fluid, model.scales, disc.bc, disc.bp
+    compressibility = (fluid.storage + fluid.biot_alpha**2 / sc.modulus) * sc.h**2
+    (stress, v), (stress_b, v_b) = domain, boundary
+
+    def darcy(v, extra=0.0):
+        D = np.zeros((len(v), 1, 2, 1, 2))
+        D[:, 0, :, 0, :] = (dt * fluid.mobility_at(v)[0] + extra)[:, None, None] * np.eye(2)
+        return D
+
+    mask = np.column_stack([bc.constrained, bc.drained])
+    D = np.zeros((len(bp.weights), 3, 2, 3, 2))
+    D[:, :2, :, :2] = _elastic_operator(model.material, stress_b, v_b)
+    D[:, 2:, :, 2:] = -darcy(v_b)
+    terms = nitsche.Nitsche.build(bp, mask, D, np.zeros(3))
+    lam_u = nitsche.largest_eigenvalue(
+        (disc.su, disc.w, _elastic_operator(model.material, stress, v)),
+        (disc.sub, bp.weights, terms.operator[:, :2, :2]))
+    lam_p = nitsche.largest_eigenvalue(
+        (disc.sp, disc.w, darcy(v, compressibility)),
+        (disc.spb, bp.weights, nitsche.flux_operator(bp, mask[:, 2:],
+                                                     darcy(v_b, compressibility))))
+    return replace(terms, beta=nitsche.SAFETY * np.array([lam_u, lam_u, -lam_p]))
+
+
+def _elastic_operator(material, stress, v):
+    """:func:`efg.nitsche.isotropic` of the material's elastic moduli at the states
+    ``(stress, v)`` (P, 2, 2, 2, 2) [kPa]."""
+    p, _ = invariants(stress)
+    K, G = material.moduli(p, v)
+    return nitsche.isotropic(*np.broadcast_arrays(K, G, p)[:2])
+
+
+def _pressure_gradient(shape, p):
+    """``grad p`` (P, 2) at the shape functions' points [kPa/m]."""
+    return np.stack([shape.dphi_dx @ p, shape.dphi_dy @ p], 1)
+
+
+def _tangent(model, disc, stress, total, tangent, J, Finv, dt, v_n, grad_p, boundary):
     """The Newton tangent of ``(ux, uy, p_w)`` (fields blocked) at the current iterate:
-    :func:`soil.weakform.tangent` in the domain, the penalties on the boundary."""
-    bc = disc.bc
+    :func:`soil.weakform.tangent` in the domain, the coefficients ``boundary`` (G, 3, 3,
+    3, 3) of the essential conditions at the boundary points."""
     coeff = weakform.tangent(tangent, stress, total, J, Finv, disc.w, model.case.fluid, dt,
                              model.beta, v_n, grad_p)
-    pen = np.zeros((len(disc.bp.weights), 3, 3, 3, 3))
-    constrained = bc.constrained | np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
-    pen[:, :2, :, :2, :] = penalty_coefficients(disc.bp, constrained, alpha_u)
-    pen[:, 2, 0, 2, 0] = -alpha_p * disc.bp.weights * bc.drained
-    K = disc.tangent(coeff, pen)
+    K = disc.tangent(coeff, boundary)
     if not model.tau:
         return K
     n = disc.fluctuation.shape[0]
@@ -393,8 +523,10 @@ class _Discretisation:
         """Block name: its (test, trial) shape functions, domain then boundary points."""
         if self.shared:
             return {"domain": ((self.tu, self.su), (self.sub, self.sub))}
-        return {"uu": ((self.tu, self.su), (self.sub, self.sub)), "up": ((self.tu, self.sp),),
-                "pu": ((self.tp, self.su),), "pp": ((self.tp, self.sp), (self.spb, self.spb))}
+        return {"uu": ((self.tu, self.su), (self.sub, self.sub)),
+                "up": ((self.tu, self.sp), (self.sub, self.spb)),
+                "pu": ((self.tp, self.su), (self.spb, self.sub)),
+                "pp": ((self.tp, self.sp), (self.spb, self.spb))}
 
     def block(self, name, coeff, boundary):
         """One block's matrix from its domain (and boundary) coefficients."""
@@ -412,8 +544,8 @@ class _Discretisation:
         u, p = slice(0, 2), slice(2, 3)
         return sp.bmat([
             [self.block("uu", coeff[:, u, :, u], boundary[:, u, :, u]),
-             self.block("up", coeff[:, u, :, p], None)],
-            [self.block("pu", coeff[:, p, :, u], None),
+             self.block("up", coeff[:, u, :, p], boundary[:, u, :, p])],
+            [self.block("pu", coeff[:, p, :, u], boundary[:, p, :, u]),
              self.block("pp", coeff[:, p, :, p], boundary[:, p, :, p])]], format="csr")
 
 
