@@ -28,12 +28,14 @@ integration points take stress and state from the nodes by MLS interpolation, an
 converged step the nodes update their own state with the nodal stretching ``D^I`` (the one
 that enters ERR, paper eq. 1) and move by ``u^h(x_I)``.
 
-Essential conditions are penalties on total quantities: each boundary Gauss point keeps
-the gap ``u^h - u_bar`` of its constrained components, so reactions carried in earlier
-steps are not lost (a velocity-controlled footing's uy target is -rate x t). A rigid plate
-(Mandel) or a load-controlled footing adds one unknown, its settlement; its total force
-equals the edge load or the footing's force. The reaction of each named segment is the
-penalty (or plate) force over its points, ``-sum alpha w gap_y``. When no boundary is
+Essential conditions act on total quantities, by penalty or by Nitsche's method
+(``efg.essential``; :class:`_Nitsche`): each boundary Gauss point keeps the gap ``u^h -
+u_bar`` of its constrained components, so reactions carried in earlier steps are not lost
+(a velocity-controlled footing's uy target is -rate x t). A rigid plate (Mandel) or a
+load-controlled footing adds one unknown, its settlement, tied to its points by the same
+method; its total force equals the edge load or the footing's force. The reaction of each
+named segment is the force of the condition over its points: ``-sum alpha w gap_y``
+(penalty) or ``sum w (P n - beta gap)_y`` (Nitsche). When no boundary is
 drained or free and the constituents are incompressible, the pore pressure is defined up
 to a constant: the mean change of p_w over the domain is then pinned to zero by one
 Lagrange multiplier.
@@ -205,7 +207,7 @@ class _System:
         self.traction = (cauchy_traction(model.sigma0_bp, disc.bp.normal)
                          + bc.traction * bc.loaded * case.loading.factor(t1))
         self.plate_force = case.plate_force(t1)
-        self.rigid_w = self.alpha_u * disc.bp.weights * bc.rigid
+        self.rigid_w = (self.nitsche is None) * self.alpha_u * disc.bp.weights * bc.rigid
         self.c_mean = disc.tp.phi.T @ disc.w
         self.du, self.p, self.plate, self.lam = (np.zeros(2 * self.n), points.p.copy(),
                                                  points.plate, 0.0)
@@ -232,10 +234,12 @@ class _System:
         R_p = disc.tp.tested(r[:, 2])
         ub = disc.sub.phi @ self.du.reshape(2, n).T                          # (G, 2)
         self.gap = points.gap + ub - self.du_bar
-        self.gaps = np.column_stack([self.gap, disc.spb.phi @ self.p])      # (G, 3)
+        self.plate_gap = points.plate_gap + ub[:, 1] - (self.plate - points.plate)
+        self.gaps = np.column_stack([self.gap[:, 0],
+                                     np.where(bc.rigid, self.plate_gap, self.gap[:, 1]),
+                                     disc.spb.phi @ self.p])                  # (G, 3)
         essential_u, essential_p = self._essential()
         R_u, R_p = R_u + essential_u, R_p + essential_p
-        self.plate_gap = points.plate_gap + ub[:, 1] - (self.plate - points.plate)
         R_u[n:] += disc.sub.phi.T @ (self.rigid_w * self.plate_gap)
         R_u -= np.concatenate([disc.sub.phi.T @ (disc.bp.weights * self.traction[:, f])
                                for f in range(2)])
@@ -243,7 +247,7 @@ class _System:
             R_p -= model.tau * (disc.fluctuation @ (self.p - points.p))
         extra_R = []
         if bc.rigid.any():
-            extra_R.append(-np.sum(self.rigid_w * self.plate_gap) - self.plate_force)
+            extra_R.append(self._plate_reaction() - self.plate_force)
         sc = model.scales
         if sc.pin_pressure:
             R_p += self.c_mean * self.lam
@@ -278,29 +282,61 @@ class _System:
                 disc.spb.tested(r[:, 2]))
 
     def _essential_tangent(self):
-        """Boundary coefficients (G, 3, 3, 3, 3) of the essential conditions and of the
-        rigid plate (a penalty with either method)."""
+        """Boundary coefficients (G, 3, 3, 3, 3) of the essential conditions, the rigid
+        plate's points included."""
         bc, bp = self.disc.bc, self.disc.bp
+        if self.nitsche is not None:
+            return self.nitsche.tangent()
+        coeff = np.zeros((len(bp.weights), 3, 3, 3, 3))
+        coeff[:, 2, 0, 2, 0] = -self.alpha_p * bp.weights * bc.drained
         rigid = np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
-        if self.nitsche is None:
-            coeff = np.zeros((len(bp.weights), 3, 3, 3, 3))
-            coeff[:, 2, 0, 2, 0] = -self.alpha_p * bp.weights * bc.drained
-            rigid = rigid | bc.constrained
-        else:
-            coeff = self.nitsche.tangent()
-        coeff[:, :2, :, :2, :] += penalty_coefficients(bp, rigid, self.alpha_u)
+        coeff[:, :2, :, :2, :] = penalty_coefficients(bp, rigid | bc.constrained,
+                                                      self.alpha_u)
         return coeff
 
-    def domain_tangent(self):
+    def _plate_reaction(self):
+        """The force of the plate on the soil [kN/m, y up]: ``-sum alpha w gap`` or the
+        Nitsche reaction over the plate's points."""
+        if self.nitsche is None:
+            return -np.sum(self.rigid_w * self.plate_gap)
+        return np.sum(self.nitsche.reaction(self.gaps)[:, 1] * self.disc.bc.rigid)
+
+    def _plate_border(self, boundary):
+        """Column, row and corner of the plate's settlement in the tangent (None without
+        a plate), from the boundary coefficients ``boundary`` of
+        :meth:`_essential_tangent`: the residual depends on the settlement a through
+        the plate's gap ``u_y - a``, and the plate's equation on u and p_w through its
+        reaction."""
+        disc, bc, n = self.disc, self.disc.bc, self.n
+        if not bc.rigid.any():
+            return None
+        if self.nitsche is None:
+            c = np.zeros(3 * n)
+            c[n:2 * n] = -(disc.sub.phi.T @ self.rigid_w)
+            return c, c, self.rigid_w.sum()
+        terms, rigid = self.nitsche.terms, bc.rigid.astype(float)
+        by_gap = np.zeros((len(rigid), 3, 3))          # d r / d gap_y at the plate
+        by_gap[:, 1, 0] = terms.beta[1] * disc.bp.weights * rigid
+        by_gap[:, :, 1:] = -terms.operator[:, 1] * rigid[:, None, None]
+        reaction = -boundary[:, 1, 0] * rigid[:, None, None]    # (G, field, slot)
+        shapes = (disc.sub, disc.sub, disc.spb)
+        column = -np.concatenate([s.tested(by_gap[:, f]) for f, s in enumerate(shapes)])
+        row = np.concatenate([s.tested(reaction[:, g]) for g, s in enumerate(shapes)])
+        return column, row, by_gap[:, 1, 0].sum()
+
+    def domain_tangent(self, boundary=None):
         """The tangent of ``(ux, uy, p_w)`` at the iterate, essential conditions
-        included."""
+        included (their coefficients ``boundary``, by default
+        :meth:`_essential_tangent`)."""
+        boundary = self._essential_tangent() if boundary is None else boundary
         return _tangent(self.model, self.disc, self.stress, self.total,
                         self.material_tangent, self.J, self.Finv, self.dt,
-                        self.state_n["v"], self.grad_p, self._essential_tangent())
+                        self.state_n["v"], self.grad_p, boundary)
 
     def tangent(self):
         """:meth:`domain_tangent` bordered by the plate and the pin, if any."""
-        return _bordered(self.domain_tangent(), self.disc, self.n, self.rigid_w,
+        boundary = self._essential_tangent()
+        return _bordered(self.domain_tangent(boundary), self._plate_border(boundary),
                          self.c_mean, self.model.scales.pin_pressure)
 
     def advance(self, dx):
@@ -323,9 +359,9 @@ class _System:
         bc = disc.bc
         if self.nitsche is None:
             force = -self.alpha_u * disc.bp.weights * bc.constrained[:, 1] * self.gap[:, 1]
+            force -= self.rigid_w * self.plate_gap
         else:
             force = self.nitsche.reaction(self.gaps)[:, 1]
-        force -= self.rigid_w * self.plate_gap
         on = bc.segment >= 0
         reactions = np.bincount(bc.segment[on], force[on],
                                 minlength=len(self.model.case.boundary.segments()))
@@ -348,8 +384,9 @@ class _Nitsche:
     start-of-step state for u, ``-dt k/gamma_w`` at the start-of-step void ratio for p_w.
     beta = :data:`efg.nitsche.SAFETY` x :func:`efg.nitsche.largest_eigenvalue` per field,
     the bound of p_w taken with ``dt k/gamma_w + (S + alpha^2/M) h^2``, the scale of the
-    pressure penalty: with k = 0 (no flux, so no consistency or symmetric term) the
-    drained condition is then still held, by a weak penalty of about 2 lambda/M.
+    pressure penalty: with k = 0 (no flux, so no consistency or symmetric term) a
+    drained condition is then still held, by the stabilisation alone (a penalty of the
+    order of that scale over h, not 10^6 times it).
     """
 
     def __init__(self, model, points, disc, dt, domain):
@@ -403,7 +440,8 @@ def _nitsche_terms(model, disc, dt, domain, boundary):
         D[:, 0, :, 0, :] = (dt * fluid.mobility_at(v)[0] + extra)[:, None, None] * np.eye(2)
         return D
 
-    mask = np.column_stack([bc.constrained, bc.drained])
+    mask = np.column_stack([bc.constrained[:, 0], bc.constrained[:, 1] | bc.rigid,
+                            bc.drained])
     D = np.zeros((len(bp.weights), 3, 2, 3, 2))
     D[:, :2, :, :2] = _elastic_operator(model.material, stress_b, v_b)
     D[:, 2:, :, 2:] = -darcy(v_b)
@@ -460,7 +498,9 @@ def _uniqueness(model, disc, K, n):
 
 
 def _roundoff(disc, points, du, du_bar, p, plate, alpha_u, alpha_p, rigid_w):
-    """Round-off level of the penalty forces in the residual rows, (2n,), (n,) and a float.
+    """Round-off level of the penalty forces in the residual rows, (2n,), (n,) and a float
+    (with Nitsche's method, alpha is its beta, some 10^5 times smaller: the level is then
+    far below the tolerance).
 
     A penalty force ``phi^T (alpha w gap)`` has ``alpha`` about ``penalty`` (1e6) times the
     stiffness, and its gap is a difference of displacements (or pressures) of the size of
@@ -603,26 +643,26 @@ def _discretise(model, nodes, evaluation, timings, quad=None):
     return disc
 
 
-def _bordered(K, disc, n, rigid_w, c_mean, pin):
-    """Append the rigid plate's settlement and the mean-pressure multiplier, if any."""
+def _bordered(K, plate, c_mean, pin):
+    """Append the rigid plate's settlement (``plate``: its column, row and corner, or
+    None) and the mean-pressure multiplier (if ``pin``) to the tangent K of ``(ux, uy,
+    p_w)``."""
     cols, rows, corner = [], [], []
-    size = K.shape[0]
-    if disc.bc.rigid.any():
-        c = np.zeros(size)
-        c[n:2 * n] = -(disc.sub.phi.T @ rigid_w)
-        cols.append(c)
-        rows.append(c)
-        corner.append(rigid_w.sum())
+    n = K.shape[0] // 3
+    if plate is not None:
+        cols.append(plate[0])
+        rows.append(plate[1])
+        corner.append(plate[2])
     if pin:
-        c = np.zeros(size)
+        c = np.zeros(3 * n)
         c[2 * n:3 * n] = c_mean
         cols.append(c)
         rows.append(c)
         corner.append(0.0)
     if not cols:
         return K
-    C = sp.csc_matrix(np.column_stack(cols))
-    return sp.bmat([[K, C], [C.T, sp.diags(corner)]], format="csc")
+    C, B = sp.csc_matrix(np.column_stack(cols)), sp.csr_matrix(np.vstack(rows))
+    return sp.bmat([[K, C], [B, sp.diags(corner)]], format="csc")
 
 
 def _gradient(shape, du, n):

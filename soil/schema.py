@@ -134,9 +134,10 @@ Schema (every case has the same one; unknown keys are an error)::
     order = 2                         # Gauss order (squares: per direction; triangles:
                                       # degree, at most 19)
     essential = "penalty"             # essential conditions: "penalty" or "nitsche"
-                                      # (efg.nitsche: consistent, well-scaled for Krylov
-                                      # solvers; a rigid plate stays a penalty)
+                                      # (efg.nitsche: consistent, no factor to choose,
+                                      # a matrix on the stiffness's scale)
     penalty = 1e6                     # penalty factor relative to the stiffness scale
+                                      # (essential = "penalty")
     correction = "vci"                # consistent test gradients (efg.vci) or "none"
     stabilisation = "none"            # or "perturbation": the flow-equation term
                                       # -h^2/(4M) int grad(p - p_n) . grad(q) of

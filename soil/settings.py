@@ -153,10 +153,9 @@ class EFGSettings:
     ``cells`` is ``delaunay`` (rebuilt every step) or ``squares`` (quarter cells along
     the boundary); ``order`` is the Gauss order of the cells; ``essential`` is how
     essential conditions are imposed, ``penalty`` (:mod:`efg.boundary`) or ``nitsche``
-    (:mod:`efg.nitsche`: consistent, beta from an eigenvalue bound, no factor to choose;
-    a rigid plate stays a penalty); ``penalty`` is the penalty factor relative to the
-    stiffness scale (P-wave modulus over nodal spacing; with ``nitsche``, the rigid
-    plate's only);
+    (:mod:`efg.nitsche`: consistent, beta from an eigenvalue bound, no factor to
+    choose); ``penalty`` is the penalty factor relative to the stiffness scale (P-wave
+    modulus over nodal spacing; unused with ``nitsche``);
     ``correction`` is ``vci`` (variationally consistent test-function gradients, which
     pass the patch test with any quadrature; :mod:`efg.vci`) or ``none`` (plain Gauss
     quadrature of the MLS gradients, as in the paper); ``stabilisation`` is ``none``,
