@@ -124,7 +124,7 @@ def _static_bound(case):
     shape_b = ShapeFunctions.build(nodes, bp.points, s.weight_u, s.scale_u)
     constrained, *_ = statics.boundary_data(case, bp, case.exact_solution())
     K, G = material.moduli()
-    D_b, D = (nitsche.isotropic(np.full(m, K), np.full(m, G))
+    D_b, D = (nitsche.gradient_operator(nitsche.isotropic(np.full(m, K), np.full(m, G)))
               for m in (len(bp.weights), len(quad.weights)))
     return ((shape, quad.weights, D),
             (shape_b, bp.weights, nitsche.flux_operator(bp, constrained, D_b)))

@@ -11,19 +11,27 @@ instead, to the residual of every test function v, with ``gap = u^h - u_bar``:
   of grad v: the first Piola stress ``J sigma F^-T`` for momentum, ``-dt (k / gamma_w)
   grad p`` for continuity; :mod:`soil.weakform`): the reaction is the flux that the
   interior equations carry to the boundary, not a penalty force;
-* symmetry, ``-int gap_f (D grad v n)_f dGamma``, with a reference operator D frozen over
-  the step: at the reference state, the transpose of the consistency term;
+* the adjoint term, ``+int gap_f (D grad v n)_f dGamma``, with a reference operator D
+  frozen over the step (at the reference state, minus the transpose of the consistency
+  term: the skew-symmetric variant);
 * stabilisation, ``beta int v_f gap_f dGamma``.
 
 All three vanish for the exact solution (zero gap, exact flux): the method is consistent
-for every beta, and its error is the discretisation's. With ``A(v) = int grad v : D :
-grad v dOmega`` and ``lambda`` the largest eigenvalue of ``int_Gamma |(D grad v n)_c|^2
-dGamma = lambda A(v)`` over the discrete functions (c the constrained components),
-Cauchy-Schwarz bounds the symmetric pair by ``2 sqrt(lambda A(v)) |v_c|_Gamma``, and
-``A - 2 sqrt(lambda A) |v_c| + beta |v_c|^2`` is positive definite in ``(sqrt(A), |v_c|)``
-for beta > lambda. ``beta = 2 lambda`` (:data:`SAFETY`) as Griebel and Schweitzer (2003, "A
-particle-partition of unity method part V: boundary conditions") choose it; lambda is
-estimated on the strip of nodes next to the constrained boundary (:func:`largest_eigenvalue`).
+for every beta, and its error is the discretisation's. Where D is the weak form's own
+operator (linear elasticity), the consistency and adjoint terms cancel in ``v K v = A(v) +
+beta |v_c|^2_Gamma`` (``A(v) = int grad v : D : grad v``, c the constrained components):
+coercive for every beta > 0 (Burman 2012, "A penalty-free nonsymmetric Nitsche-type
+method for the weak imposition of boundary conditions", SINUM 50). The symmetric variant
+(adjoint term with a minus sign) needs beta above ``lambda``, the largest eigenvalue of
+``int_Gamma |(D grad v n)_c|^2 = lambda A(v)``, and only for the operator it is built
+with: with the elastic D against a yielding clay, whose domain form is far softer, the
+unconfined compression left its homogeneous path at 3.6 % strain and stopped at 6.4 %
+(measured; skew-symmetric: homogeneous to 20 %, as the penalty). The matrices are not
+symmetric anyway (VCI's test gradients, finite strain). beta keeps the scale at which the
+symmetric variant is coercive, ``beta = 2 lambda`` (:data:`SAFETY`; Griebel and Schweitzer
+2003, "A particle-partition of unity method part V: boundary conditions"), so that the
+condition is held as tightly; lambda is estimated on the strip of nodes next to the
+constrained boundary (:func:`largest_eigenvalue`).
 
 Layout: the fields and slots of :mod:`soil.weakform` (value, d/dx, d/dy on x_n), at the
 boundary points with their line weights [m per unit thickness]. Signs: the continuity
@@ -40,7 +48,8 @@ import scipy.sparse.linalg as spla
 from efg.assembly import Pattern, elasticity_coefficients, scatter
 from soil.kinematics import DEVIATORIC, IDENTITY
 
-#: beta over the eigenvalue bound lambda (coercive for any factor above 1).
+#: beta over the eigenvalue bound lambda (the symmetric variant is coercive for any factor
+#: above 1, the skew-symmetric one for any beta > 0).
 SAFETY = 2.0
 #: Rings of neighbouring nodes added to those whose supports reach a constrained point, on
 #: which :func:`largest_eigenvalue` solves (the maximiser lives next to the boundary).
@@ -106,7 +115,7 @@ class Nitsche:
         :meth:`reaction`)."""
         r = np.zeros(gap.shape + (3,))
         r[:, :, 0] = -self.reaction(flux, gap)
-        r[:, :, 1:] = -np.einsum("gh,ghfl->gfl", gap, self.operator)
+        r[:, :, 1:] = np.einsum("gh,ghfl->gfl", gap, self.operator)
         return r
 
     def tangent(self, c):
@@ -117,7 +126,7 @@ class Nitsche:
         out = np.zeros((len(c), F) + c.shape[2:])
         through = np.einsum("gk,gfkht->gfht", self.normal, c[:, :F, 1:])
         out[:, :, 0] = -(self.mask[:, :, None, None] * through)
-        out[:, :, 1:, :F, 0] = -np.moveaxis(self.operator, 1, 3)
+        out[:, :, 1:, :F, 0] = np.moveaxis(self.operator, 1, 3)
         diagonal = self.beta * self.weights[:, None] * self.mask
         out[:, np.arange(F), 0, np.arange(F), 0] += diagonal
         return out
@@ -132,12 +141,20 @@ def flux_operator(bpoints, mask, D):
     return T * (bpoints.weights[:, None] * mask)[:, :, None, None]
 
 
-def isotropic(K, G):
+def gradient_operator(C):
     """The operator ``D[p, f, k, g, l] = d sigma_fk / d(d u_g / d x_l)`` (P, 2, 2, 2, 2) of
-    isotropic plane-strain elasticity with bulk and shear moduli K, G (P,) [kPa]."""
-    C = (np.asarray(K)[:, None, None] * np.outer(IDENTITY, IDENTITY)
-         + 2 * np.asarray(G)[:, None, None] * DEVIATORIC)
-    return elasticity_coefficients(np.ones(len(C)), C)[:, :, 1:, :, 1:]
+    Voigt tangents C (P, 4, 4) [kPa] (strain ``(xx, yy, zz, 2xy)`` to stress ``(xx, yy,
+    zz, xy)``), made symmetric: ``(C + C^T) / 2``."""
+    C = np.asarray(C, float)
+    return elasticity_coefficients(np.ones(len(C)), (C + np.swapaxes(C, 1, 2)) / 2)[
+        :, :, 1:, :, 1:]
+
+
+def isotropic(K, G):
+    """Voigt tangents (P, 4, 4) of isotropic elasticity with bulk and shear moduli K, G
+    (P,) [kPa]."""
+    return (np.asarray(K)[:, None, None] * np.outer(IDENTITY, IDENTITY)
+            + 2 * np.asarray(G)[:, None, None] * DEVIATORIC)
 
 
 def largest_eigenvalue(domain, boundary, rings=RINGS):

@@ -314,10 +314,9 @@ class _System:
             c = np.zeros(3 * n)
             c[n:2 * n] = -(disc.sub.phi.T @ self.rigid_w)
             return c, c, self.rigid_w.sum()
-        terms, rigid = self.nitsche.terms, bc.rigid.astype(float)
-        by_gap = np.zeros((len(rigid), 3, 3))          # d r / d gap_y at the plate
-        by_gap[:, 1, 0] = terms.beta[1] * disc.bp.weights * rigid
-        by_gap[:, :, 1:] = -terms.operator[:, 1] * rigid[:, None, None]
+        rigid = bc.rigid.astype(float)
+        by_gap = self.nitsche.terms.residual(                 # d r / d gap_y at the plate
+            np.zeros((len(rigid), 3, 3)), np.column_stack([0 * rigid, rigid, 0 * rigid]))
         reaction = -boundary[:, 1, 0] * rigid[:, None, None]    # (G, field, slot)
         shapes = (disc.sub, disc.sub, disc.spb)
         column = -np.concatenate([s.tested(by_gap[:, f]) for f, s in enumerate(shapes)])
@@ -384,7 +383,7 @@ class _Nitsche:
     start-of-step state for u, ``-dt k/gamma_w`` at the start-of-step void ratio for p_w.
     beta = :data:`efg.nitsche.SAFETY` x :func:`efg.nitsche.largest_eigenvalue` per field,
     the bound of p_w taken with ``dt k/gamma_w + (S + alpha^2/M) h^2``, the scale of the
-    pressure penalty: with k = 0 (no flux, so no consistency or symmetric term) a
+    pressure penalty: with k = 0 (no flux, so no consistency or adjoint term) a
     drained condition is then still held, by the stabilisation alone (a penalty of the
     order of that scale over h, not 10^6 times it).
     """
@@ -457,11 +456,11 @@ def _nitsche_terms(model, disc, dt, domain, boundary):
 
 
 def _elastic_operator(material, stress, v):
-    """:func:`efg.nitsche.isotropic` of the material's elastic moduli at the states
-    ``(stress, v)`` (P, 2, 2, 2, 2) [kPa]."""
+    """The gradient operator (:func:`efg.nitsche.gradient_operator`) of the material's
+    isotropic elastic moduli at the states ``(stress, v)``, (P, 2, 2, 2, 2) [kPa]."""
     p, _ = invariants(stress)
     K, G = material.moduli(p, v)
-    return nitsche.isotropic(*np.broadcast_arrays(K, G, p)[:2])
+    return nitsche.gradient_operator(nitsche.isotropic(*np.broadcast_arrays(K, G, p)[:2]))
 
 
 def _pressure_gradient(shape, p):

@@ -97,13 +97,14 @@ def _penalty(case, material, domain, shape_b, bp, constrained, u_bar):
 
 def _nitsche(case, material, domain, shape_b, bp, constrained, u_bar):
     """Nitsche coefficients (G, 2, 3, 2, 3), right-hand side (2N,) and beta [kPa/m]: the
-    reference operator is the stiffness itself, so the matrix is symmetric but for VCI.
+    reference operator is the stiffness itself, so the consistency and adjoint terms
+    cancel in ``v K v`` (:mod:`efg.nitsche`).
 
     The terms are linear in u: the right-hand side is minus the residual of u = 0, whose
     flux is zero and gap ``-u_bar``, i.e. the terms of the gap ``u_bar``."""
     shape, weights = domain
     K, G = material.moduli()
-    D_b, D = (nitsche.isotropic(np.full(m, K), np.full(m, G))
+    D_b, D = (nitsche.gradient_operator(nitsche.isotropic(np.full(m, K), np.full(m, G)))
               for m in (len(bp.weights), len(weights)))
     terms = nitsche.Nitsche.build(bp, constrained, D_b, np.zeros(2))
     beta = nitsche.SAFETY * nitsche.largest_eigenvalue(
