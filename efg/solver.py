@@ -201,8 +201,9 @@ class _System:
         self.alpha_u, self.alpha_p = _penalties(model, [0.0, self.dt]).values()
         self.nitsche = None
         if case.efg.essential == "nitsche":
-            self.nitsche = _Nitsche(model, points, disc, self.dt,
-                                    (self.stress_n, self.state_n["v"]))
+            with timed(timings, "assembly_s"):        # beta's eigenvalue bounds
+                self.nitsche = _Nitsche(model, points, disc, self.dt,
+                                        (self.stress_n, self.state_n["v"]))
         self.weight = buoyant_weight(case, self.state_n["v"])
         self.traction = (cauchy_traction(model.sigma0_bp, disc.bp.normal)
                          + bc.traction * bc.loaded * case.loading.factor(t1))
