@@ -86,7 +86,9 @@ def one_step(method, nodes, material):
     summary = result.summary
     row = {"method": method, "material": material, "nodes": len(case.nodes()),
            "dofs": summary["dofs"], "iterations": int(result.history.iterations.sum()),
-           "factorisations": summary["factorisations"], "wall_s": wall, "status": "ok"}
+           "factorisations": summary["factorisations"],
+           "symmetric_factorisations": summary["symmetric_factorisations"],
+           "perturbed_pivots": summary["perturbed_pivots"], "wall_s": wall, "status": "ok"}
     for phase, timer in PHASES.items():
         row[phase] = summary["timings"][timer]
     row["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024

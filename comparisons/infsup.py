@@ -197,10 +197,9 @@ def _fem(case, method):
     space = Space.build(case, method)
     ub, pb = cell_bases(space.mesh0, space.pair)
     u, p = Shapes.of(ub), Shapes.of(pb)
-    E, Q = ub.dx.shape
-    gram, div, mass, stab = (c.reshape(E, Q, *c.shape[1:]) for c in coefficients(
+    gram, div, mass, stab = coefficients(
         ub.dx.ravel(), case.geometry.height,
-        _in_modulus(fem_reference.solver.Model.build(case, method))))
+        _in_modulus(fem_reference.solver.Model.build(case, method)))
     edge = np.unique(np.concatenate(list(space.u_dofs.values())))
     interior = np.setdiff1d(np.arange(2 * space.n_u), np.concatenate([edge, space.n_u + edge]))
     pair = space.pair
@@ -237,8 +236,7 @@ def _efg(case):
 
 def _efg_block(test, trial, coeff):
     pattern = Pattern.build((test, trial))
-    return pattern.matrix(scatter(pattern, test, trial, coeff), coeff.shape[1],
-                          coeff.shape[3])
+    return pattern.matrix(scatter(pattern, test, trial, coeff), *coeff.fields)
 
 
 def _in_modulus(model):

@@ -14,8 +14,10 @@ matrix has its fields blocked (row ``f n_test + a``, column ``g n_trial + b``) a
 layout follows from the node pattern, so a numba kernel adds every point's integrand
 straight into the global value array: it walks the pattern row by row (the test node),
 marks where each trial node's entry sits, and accumulates over the points in the test
-node's support only the (f, g, j) terms the coefficients use. No search, no COO of
-duplicates, no copy into a matrix.
+node's support only the (f, g, j) terms the coefficients have. The coefficients come as
+:class:`soil.weakform.Coefficients`, the terms in use and their values (M, T), so no
+(M, ft, 3, fs, 3) array is made or searched. No search, no COO of duplicates, no copy
+into a matrix.
 """
 
 from dataclasses import dataclass, field
@@ -23,6 +25,9 @@ from dataclasses import dataclass, field
 import numba
 import numpy as np
 import scipy.sparse as sp
+
+from soil.kinematics import GRADIENT_TO_VOIGT
+from soil.weakform import Coefficients
 
 
 @dataclass
@@ -114,8 +119,9 @@ def scatter(pattern, test, trial, coeff, out=None):
         From ``Pattern.build(..., (test, trial), ...)``.
     test, trial : ShapeFunctions
         Shape functions at the same integration points.
-    coeff : ndarray, shape (M, ft, 3, fs, 3)
-        Integrand coefficients at the M points, integration weight included.
+    coeff : soil.weakform.Coefficients
+        Integrand coefficients at the M points (``ft`` test and ``fs`` trial fields),
+        integration weight included; only its terms are scattered.
     out : ndarray, shape (ft * fs * pattern.nnz,), optional
         Values to add to (``pattern.zeros(ft, fs)`` when not given).
 
@@ -124,38 +130,62 @@ def scatter(pattern, test, trial, coeff, out=None):
     ndarray
         ``out``, for :meth:`Pattern.matrix`.
     """
-    ft, fs = coeff.shape[1], coeff.shape[3]
+    ft, fs = coeff.fields
     if out is None:
         out = pattern.zeros(ft, fs)
-    used = (coeff != 0).any(axis=0)                        # (ft, 3, fs, 3)
-    f, g, j = np.nonzero(used.any(axis=1))                 # the terms (f, g, j) in use
-    by_j = np.argsort(j, kind="stable")
-    f, g, j = f[by_j], g[by_j], j[by_j]
+    tf, tg, j_start, column = _kernel_terms(coeff.terms)
     phi = test.phi
     order = sp.csr_matrix((np.arange(phi.nnz, dtype=np.int64), phi.indices, phi.indptr),
                           shape=phi.shape).tocsc()  # test entries grouped by node
     _scatter(pattern.indptr, pattern.indices, order.indptr, order.indices, order.data,
              components(test), trial.phi.indptr, trial.phi.indices, components(trial),
-             np.ascontiguousarray(coeff), f, g,
-             np.searchsorted(j, np.arange(4)), np.ascontiguousarray(used[f, :, g, j]), out)
+             np.ascontiguousarray(coeff.values), fs, tf, tg, j_start, column, out)
     return out
 
 
+def _kernel_terms(terms):
+    """The kernel's terms: the distinct ``(f, g, t)`` of the coefficient terms ``(f, s, g,
+    t)``, sorted by the trial slot t, each with the value column of each test slot s.
+
+    Returns
+    -------
+    tf, tg : ndarray of int, shape (K,)
+        Test and trial field of each kernel term.
+    j_start : ndarray of int, shape (4,)
+        Kernel terms of trial slot t are ``j_start[t]:j_start[t + 1]``.
+    column : ndarray of int, shape (K, 3)
+        The column of ``Coefficients.values`` of test slot s, -1 where no term.
+
+    Examples
+    --------
+    The first and third terms differ only in the test slot: one kernel term (f, g, t) =
+    (0, 0, 1) reading columns 0 and 2; the second is the kernel term (0, 1, 0), first by t.
+
+    >>> tf, tg, j_start, column = _kernel_terms(((0, 1, 0, 1), (0, 0, 1, 0), (0, 2, 0, 1)))
+    >>> tf.tolist(), tg.tolist(), j_start.tolist(), column.tolist()
+    ([0, 0], [1, 0], [0, 1, 2, 2], [[1, -1, -1], [-1, 0, 2]])
+    """
+    f, s, g, t = np.array(terms, dtype=np.int64).reshape(-1, 4).T
+    keys, kernel = np.unique(np.stack([t, f, g], axis=1), axis=0, return_inverse=True)
+    column = np.full((len(keys), 3), -1, dtype=np.int64)
+    column[kernel.ravel(), s] = np.arange(len(s))
+    tj, tf, tg = keys.T
+    return tf.copy(), tg.copy(), np.searchsorted(tj, np.arange(4)), column
+
+
 @numba.njit(cache=True)
-def _scatter(p_ptr, p_idx, a_colptr, a_points, a_entry, a_val, b_ptr, b_idx, b_val, coeff,
-             tf, tg, j_start, t_slots, out):
+def _scatter(p_ptr, p_idx, a_colptr, a_points, a_entry, a_val, b_ptr, b_idx, b_val, values,
+             fs, tf, tg, j_start, column, out):
     """Row by row of the pattern (the test node): a column map replaces any search. The
-    test side is contracted once per (node, point) into the terms in use, sorted by trial
-    slot j (``j_start``); every trial node of the point then adds ``t * S_b[j]`` to a
-    contiguous row buffer (trial node, term), which is added to ``out`` once per row."""
-    fs, nnz, terms = coeff.shape[3], len(p_idx), len(tf)
+    test side is contracted once per (node, point) into the kernel terms (f, g, j), sorted
+    by trial slot j (``j_start``), from the coefficient ``values`` of their test slots
+    (``column``); every trial node of the point then adds ``t * S_b[j]`` to a contiguous
+    row buffer (trial node, term), which is added to ``out`` once per row."""
+    nnz, terms = len(p_idx), len(tf)
     position = np.empty(p_idx.max() + 1 if nnz else 0, dtype=np.int64)
     widest = np.max(p_ptr[1:] - p_ptr[:-1]) if nnz else 0
     row_sum = np.zeros(widest * terms)
     t = np.empty(terms)
-    tj = np.empty(terms, dtype=np.int64)
-    for jj in range(3):
-        tj[j_start[jj]:j_start[jj + 1]] = jj
     for row in range(len(p_ptr) - 1):
         start, length = p_ptr[row], p_ptr[row + 1] - p_ptr[row]
         for k in range(start, p_ptr[row + 1]):
@@ -165,8 +195,8 @@ def _scatter(p_ptr, p_idx, a_colptr, a_points, a_entry, a_val, b_ptr, b_idx, b_v
             for m in range(terms):
                 s = 0.0
                 for i in range(3):
-                    if t_slots[m, i]:
-                        s += a_val[i][ka] * coeff[q, tf[m], i, tg[m], tj[m]]
+                    if column[m, i] >= 0:
+                        s += a_val[i][ka] * values[q, column[m, i]]
                 t[m] = s
             for kb in range(b_ptr[q], b_ptr[q + 1]):
                 at = position[b_idx[kb]] * terms
@@ -190,15 +220,25 @@ def elasticity_coefficients(weights, tangent):
         Integration weights [m2 per unit thickness].
     tangent : ndarray, shape (M, 4, 4) or (4, 4)
         ``d sigma / d eps`` from Voigt strain ``(xx, yy, zz, 2xy)`` to stress
-        ``(xx, yy, zz, xy)``.
+        ``(xx, yy, zz, xy)`` [kPa].
 
     Returns
     -------
-    ndarray, shape (M, 2, 3, 2, 3)
+    soil.weakform.Coefficients
+        2 x 2 fields; the gradient terms ``(f, i, g, j)`` (i, j: d/dx, d/dy) whose tangent
+        entry is not zero at every point, at most 16 [kPa m2].
+
+    Examples
+    --------
+    An isotropic tangent has no shear-normal coupling: 8 of the 16 terms.
+
+    >>> from soil.analytical import plane_strain_stiffness
+    >>> c = elasticity_coefficients(np.ones(3), plane_strain_stiffness(1.0, 0.25))
+    >>> len(c.terms), c.fields
+    (8, (2, 2))
     """
-    tangent = np.broadcast_to(tangent, (len(weights), 4, 4))
-    # B maps (field f, derivative i) to a Voigt strain component
-    B = np.zeros((2, 3, 4))
-    B[0, 1, 0] = B[1, 2, 1] = 1.0    # eps_xx = d ux/dx, eps_yy = d uy/dy
-    B[0, 2, 3] = B[1, 1, 3] = 1.0    # 2 eps_xy = d ux/dy + d uy/dx
-    return np.einsum("fik,mkl,gjl,m->mfigj", B, tangent, B, weights)
+    tangent = np.asarray(tangent, dtype=float)
+    used = np.reshape(tangent != 0, (-1, 4, 4)).any(axis=0)
+    voigt = list(zip(*np.nonzero(GRADIENT_TO_VOIGT)))        # (field, derivative, Voigt)
+    return Coefficients.of({(f, 1 + i, g, 1 + j): weights * tangent[..., k, l]
+                            for f, i, k in voigt for g, j, l in voigt if used[k, l]}, (2, 2))

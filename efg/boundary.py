@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from soil.kinematics import prescribed_increment
+from soil.weakform import Coefficients
 
 
 @dataclass(frozen=True)
@@ -168,7 +169,7 @@ def conditions(case, bpoints, initial=None):
 
 
 def penalty_coefficients(bpoints, constrained, alpha):
-    """Coefficients (G, 2, 3, 2, 3) of the penalty block for the displacement fields.
+    """Coefficients of the penalty block for the displacement fields at the G points.
 
     Parameters
     ----------
@@ -177,11 +178,15 @@ def penalty_coefficients(bpoints, constrained, alpha):
         Whether component x / y is prescribed at each boundary point.
     alpha : float
         Penalty factor [stiffness per area].
+
+    Returns
+    -------
+    soil.weakform.Coefficients
+        2 x 2 fields, the value terms ``(f, 0, f, 0) = alpha w`` where component f is
+        constrained, else 0 [alpha's unit times m].
     """
-    coeff = np.zeros((len(bpoints.weights), 2, 3, 2, 3))
-    for f in range(2):  # the two displacement components
-        coeff[:, f, 0, f, 0] = alpha * bpoints.weights * constrained[:, f]
-    return coeff
+    return Coefficients.of({(f, 0, f, 0): alpha * bpoints.weights * constrained[:, f]
+                            for f in range(2)}, (2, 2))
 
 
 def load_vector(phi_boundary, bpoints, values, mask):

@@ -24,6 +24,7 @@ otherwise :meth:`ShapeFunctions.build` raises :class:`InputError` naming the wor
 the case entry of the scale factor (``efg.scale_u`` or ``efg.scale_p``) and the fix.
 """
 
+import dataclasses
 from dataclasses import dataclass
 
 import numba
@@ -80,6 +81,23 @@ class ShapeFunctions:
     weight: Weight
     scale: float
     rcond: np.ndarray
+
+    def subset(self, rows):
+        """The shape functions at some of the points (a slice or an index array)."""
+        return dataclasses.replace(self, phi=self.phi[rows], dphi_dx=self.dphi_dx[rows],
+                                   dphi_dy=self.dphi_dy[rows], rcond=self.rcond[rows])
+
+    def tested(self, r):
+        """``sum_s S_s^T r[:, s]`` over the slots ``S = (phi, dphi/dx, dphi/dy)``, (N,).
+
+        ``r`` (P, 3) holds one field's residual coefficients at the points (weights
+        included, :mod:`soil.weakform`'s layout); all-zero slots are skipped.
+        """
+        out = np.zeros(self.phi.shape[1])
+        for s, N in enumerate((self.phi, self.dphi_dx, self.dphi_dy)):
+            if r[:, s].any():
+                out += N.T @ r[:, s]
+        return out
 
     @property
     def indptr(self):

@@ -28,12 +28,14 @@ integration points take stress and state from the nodes by MLS interpolation, an
 converged step the nodes update their own state with the nodal stretching ``D^I`` (the one
 that enters ERR, paper eq. 1) and move by ``u^h(x_I)``.
 
-Essential conditions are penalties on total quantities: each boundary Gauss point keeps
-the gap ``u^h - u_bar`` of its constrained components, so reactions carried in earlier
-steps are not lost (a velocity-controlled footing's uy target is -rate x t). A rigid plate
-(Mandel) or a load-controlled footing adds one unknown, its settlement; its total force
-equals the edge load or the footing's force. The reaction of each named segment is the
-penalty (or plate) force over its points, ``-sum alpha w gap_y``. When no boundary is
+Essential conditions act on total quantities, by penalty or by Nitsche's method
+(``efg.essential``; :class:`_Nitsche`): each boundary Gauss point keeps the gap ``u^h -
+u_bar`` of its constrained components, so reactions carried in earlier steps are not lost
+(a velocity-controlled footing's uy target is -rate x t). A rigid plate (Mandel) or a
+load-controlled footing adds one unknown, its settlement, tied to its points by the same
+method; its total force equals the edge load or the footing's force. The reaction of each
+named segment is the force of the condition over its points: ``-sum alpha w gap_y``
+(penalty) or ``sum w (P n - beta gap)_y`` (Nitsche). When no boundary is
 drained or free and the constituents are incompressible, the pore pressure is defined up
 to a constant: the mean change of p_w over the domain is then pinned to zero by one
 Lagrange multiplier.
@@ -45,7 +47,7 @@ from functools import cached_property, partial
 import numpy as np
 import scipy.sparse as sp
 
-from efg import vci
+from efg import nitsche, vci
 from efg.quadrature import background
 from efg.assembly import Pattern, scatter
 from efg.boundary import (BOUNDARY_ORDER, boundary_points, conditions,
@@ -194,14 +196,19 @@ class _System:
         self.stress_n = su.phi @ points.stress
         self.state_n = {k: su.phi @ v for k, v in points.state.items()}
         self.p_n = disc.sp.phi @ points.p
-        self.grad_p_n = np.stack([disc.sp.dphi_dx @ points.p, disc.sp.dphi_dy @ points.p], 1)
+        self.grad_p_n = _pressure_gradient(disc.sp, points.p)
         self.du_bar = bc.target_increment(case.loading.L, disc.bp.points, self.dt)
         self.alpha_u, self.alpha_p = _penalties(model, [0.0, self.dt]).values()
+        self.nitsche = None
+        if case.efg.essential == "nitsche":
+            with timed(timings, "assembly_s"):        # beta's eigenvalue bounds
+                self.nitsche = _Nitsche(model, points, disc, self.dt,
+                                        (self.stress_n, self.state_n["v"]))
         self.weight = buoyant_weight(case, self.state_n["v"])
         self.traction = (cauchy_traction(model.sigma0_bp, disc.bp.normal)
                          + bc.traction * bc.loaded * case.loading.factor(t1))
         self.plate_force = case.plate_force(t1)
-        self.rigid_w = self.alpha_u * disc.bp.weights * bc.rigid
+        self.rigid_w = (self.nitsche is None) * self.alpha_u * disc.bp.weights * bc.rigid
         self.c_mean = disc.tp.phi.T @ disc.w
         self.du, self.p, self.plate, self.lam = (np.zeros(2 * self.n), points.p.copy(),
                                                  points.plate, 0.0)
@@ -212,57 +219,124 @@ class _System:
         """``[R_u, R_p, plate?, pin?]`` at the iterate and its scaled size beyond
         round-off."""
         model, points, disc, n = self.model, self.points, self.disc, self.n
-        bc, fluid, alpha_u = disc.bc, model.case.fluid, self.alpha_u
+        bc, fluid = disc.bc, model.case.fluid
         (self.stress, self.state, self.material_tangent, self.J, self.Finv,
          _) = material_update(model.material, self.stress_n, self.state_n,
                               _gradient(disc.su, self.du, n), self.timings,
                               "a background cell")
         p_q = disc.sp.phi @ self.p
         self.total = weakform.total_stress(self.stress, p_q, fluid)
-        self.grad_p = np.stack([disc.sp.dphi_dx @ self.p, disc.sp.dphi_dy @ self.p], 1)
+        self.grad_p = _pressure_gradient(disc.sp, self.p)
         r = weakform.residual(self.total, self.J, self.Finv, disc.w, p_q, self.p_n,
                               self.grad_p, fluid, self.dt, model.beta, self.grad_p_n,
                               self.state_n["v"], self.weight)
 
-        R_u = np.concatenate([_tested(disc.tu, r[:, f]) for f in range(2)])
+        R_u = np.concatenate([disc.tu.tested(r[:, f]) for f in range(2)])
+        R_p = disc.tp.tested(r[:, 2])
         ub = disc.sub.phi @ self.du.reshape(2, n).T                          # (G, 2)
         self.gap = points.gap + ub - self.du_bar
-        R_u += np.concatenate([disc.sub.phi.T @ (alpha_u * disc.bp.weights
-                                                  * bc.constrained[:, f] * self.gap[:, f])
-                               for f in range(2)])
         self.plate_gap = points.plate_gap + ub[:, 1] - (self.plate - points.plate)
+        self.gaps = np.column_stack([self.gap[:, 0],
+                                     np.where(bc.rigid, self.plate_gap, self.gap[:, 1]),
+                                     disc.spb.phi @ self.p])                  # (G, 3)
+        essential_u, essential_p = self._essential()
+        R_u, R_p = R_u + essential_u, R_p + essential_p
         R_u[n:] += disc.sub.phi.T @ (self.rigid_w * self.plate_gap)
         R_u -= np.concatenate([disc.sub.phi.T @ (disc.bp.weights * self.traction[:, f])
                                for f in range(2)])
-        R_p = _tested(disc.tp, r[:, 2])
         if model.tau:
             R_p -= model.tau * (disc.fluctuation @ (self.p - points.p))
-        pb = disc.spb.phi @ self.p
-        R_p -= disc.spb.phi.T @ (self.alpha_p * disc.bp.weights * bc.drained * pb)
         extra_R = []
         if bc.rigid.any():
-            extra_R.append(-np.sum(self.rigid_w * self.plate_gap) - self.plate_force)
+            extra_R.append(self._plate_reaction() - self.plate_force)
         sc = model.scales
         if sc.pin_pressure:
             R_p += self.c_mean * self.lam
             extra_R.append(self.c_mean @ (self.p - points.p))
         noise_u, noise_p, noise_plate = _roundoff(
-            disc, points, self.du.reshape(2, n).T, self.du_bar, self.p, self.plate, alpha_u,
-            self.alpha_p, self.rigid_w)
+            disc, points, self.du.reshape(2, n).T, self.du_bar, self.p, self.plate,
+            *self._factors, self.rigid_w)
         residual = max(_excess(R_u, noise_u) / sc.force, _excess(R_p, noise_p) / sc.volume,
                        _excess(extra_R[:1], noise_plate) / sc.force * bc.rigid.any(),
                        np.abs(extra_R[-1:]).max(initial=0) / sc.volume * sc.pin_pressure)
         return np.concatenate([R_u, R_p, extra_R]), residual
 
-    def domain_tangent(self):
-        """The tangent of ``(ux, uy, p_w)`` at the iterate, penalties included."""
+    @property
+    def _factors(self):
+        """The coefficients of the essential conditions' gap forces, u [kPa/m] and p_w
+        [m/kPa]: the penalty factors, or Nitsche's stabilisation."""
+        if self.nitsche is None:
+            return self.alpha_u, self.alpha_p
+        return tuple(np.abs(self.nitsche.terms.beta[1:]))
+
+    def _essential(self):
+        """The essential conditions' rows of the residual, (2n,) and (n,): penalty forces
+        ``alpha w gap`` (p_w's with the continuity equation's sign) or Nitsche's terms."""
+        disc, bc, w = self.disc, self.disc.bc, self.disc.bp.weights
+        if self.nitsche is None:
+            r = np.zeros(self.gaps.shape + (3,))
+            r[:, :, 0] = w[:, None] * np.column_stack([self.alpha_u * bc.constrained,
+                                                       -self.alpha_p * bc.drained]) * self.gaps
+        else:
+            r = self.nitsche.residual(self.du, self.p, self.gaps, self.timings)
+        return (np.concatenate([disc.sub.tested(r[:, f]) for f in range(2)]),
+                disc.spb.tested(r[:, 2]))
+
+    def _essential_tangent(self):
+        """Boundary coefficients (:class:`soil.weakform.Coefficients` of 3 x 3 fields) of
+        the essential conditions, the rigid plate's points included: the penalties' value
+        terms ``(f, 0, f, 0)`` or Nitsche's terms."""
+        bc, bp = self.disc.bc, self.disc.bp
+        if self.nitsche is not None:
+            return self.nitsche.tangent()
+        rigid = np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
+        penalty = penalty_coefficients(bp, bc.constrained | rigid, self.alpha_u).columns()
+        penalty[2, 0, 2, 0] = -self.alpha_p * bp.weights * bc.drained
+        return weakform.Coefficients.of(penalty, (3, 3))
+
+    def _plate_reaction(self):
+        """The force of the plate on the soil [kN/m, y up]: ``-sum alpha w gap`` or the
+        Nitsche reaction over the plate's points."""
+        if self.nitsche is None:
+            return -np.sum(self.rigid_w * self.plate_gap)
+        return np.sum(self.nitsche.reaction(self.gaps)[:, 1] * self.disc.bc.rigid)
+
+    def _plate_border(self, boundary):
+        """Column, row and corner of the plate's settlement in the tangent (None without
+        a plate), from the boundary coefficients ``boundary`` of
+        :meth:`_essential_tangent`: the residual depends on the settlement a through
+        the plate's gap ``u_y - a``, and the plate's equation on u and p_w through its
+        reaction."""
+        disc, bc, n = self.disc, self.disc.bc, self.n
+        if not bc.rigid.any():
+            return None
+        if self.nitsche is None:
+            c = np.zeros(3 * n)
+            c[n:2 * n] = -(disc.sub.phi.T @ self.rigid_w)
+            return c, c, self.rigid_w.sum()
+        rigid = bc.rigid.astype(float)
+        by_gap = self.nitsche.terms.residual(                 # d r / d gap_y at the plate
+            np.zeros((len(rigid), 3, 3)), np.column_stack([0 * rigid, rigid, 0 * rigid]))
+        reaction = -rigid[:, None, None] * np.stack(           # (G, field, slot): the
+            [boundary.slots(1, g)[:, 0] for g in range(3)], 1)  # terms (1, 0, g, t)
+        shapes = (disc.sub, disc.sub, disc.spb)
+        column = -np.concatenate([s.tested(by_gap[:, f]) for f, s in enumerate(shapes)])
+        row = np.concatenate([s.tested(reaction[:, g]) for g, s in enumerate(shapes)])
+        return column, row, by_gap[:, 1, 0].sum()
+
+    def domain_tangent(self, boundary=None):
+        """The tangent of ``(ux, uy, p_w)`` at the iterate, essential conditions
+        included (their coefficients ``boundary``, by default
+        :meth:`_essential_tangent`)."""
+        boundary = self._essential_tangent() if boundary is None else boundary
         return _tangent(self.model, self.disc, self.stress, self.total,
-                        self.material_tangent, self.J, self.Finv, self.dt, self.alpha_u,
-                        self.alpha_p, self.state_n["v"], self.grad_p)
+                        self.material_tangent, self.J, self.Finv, self.dt,
+                        self.state_n["v"], self.grad_p, boundary)
 
     def tangent(self):
         """:meth:`domain_tangent` bordered by the plate and the pin, if any."""
-        return _bordered(self.domain_tangent(), self.disc, self.n, self.rigid_w,
+        boundary = self._essential_tangent()
+        return _bordered(self.domain_tangent(boundary), self._plate_border(boundary),
                          self.c_mean, self.model.scales.pin_pressure)
 
     def advance(self, dx):
@@ -283,8 +357,11 @@ class _System:
             _gradient(at.nodes, self.du, n), self.timings, "a node")
         move = self.du.reshape(2, n).T
         bc = disc.bc
-        force = -(self.alpha_u * disc.bp.weights * bc.constrained[:, 1] * self.gap[:, 1]
-                  + self.rigid_w * self.plate_gap)
+        if self.nitsche is None:
+            force = -self.alpha_u * disc.bp.weights * bc.constrained[:, 1] * self.gap[:, 1]
+            force -= self.rigid_w * self.plate_gap
+        else:
+            force = self.nitsche.reaction(self.gaps)[:, 1]
         on = bc.segment >= 0
         reactions = np.bincount(bc.segment[on], force[on],
                                 minlength=len(self.model.case.boundary.segments()))
@@ -296,28 +373,115 @@ class _System:
                       stretching=deps / self.dt, reactions=reactions)
 
 
-def _tested(shape, r):
-    """``sum_s N_s^T r[:, s]`` over the test functions ``shape`` (slots value, d/dx, d/dy;
-    all-zero slots skipped)."""
-    out = np.zeros(shape.phi.shape[1])
-    for s, N in enumerate((shape.phi, shape.dphi_dx, shape.dphi_dy)):
-        if r[:, s].any():
-            out += N.T @ r[:, s]
-    return out
+class _Nitsche:
+    """Nitsche's method in one step (``efg.essential = "nitsche"``): the weak form at the
+    boundary points and the terms of :class:`efg.nitsche.Nitsche` on ``(ux, uy, p_w)``.
+
+    The boundary points take stress, state and p_w from the nodes as the integration
+    points do, and their material update gives the flux (first Piola stress ``J sigma
+    F^-T``, Darcy term) that the consistency term carries through the boundary. The
+    reference operators are frozen over the step: the isotropic elastic moduli of the
+    start-of-step state for u, ``-dt k/gamma_w`` at the start-of-step void ratio for p_w.
+    beta = :data:`efg.nitsche.SAFETY` x :func:`efg.nitsche.largest_eigenvalue` per field,
+    the bound of p_w taken with ``dt k/gamma_w + (S + alpha^2/M) h^2``, the scale of the
+    pressure penalty: with k = 0 (no flux, so no consistency or adjoint term) a
+    drained condition is then still held, by the stabilisation alone (a penalty of the
+    order of that scale over h, not 10^6 times it).
+    """
+
+    def __init__(self, model, points, disc, dt, domain):
+        sub, spb = disc.sub, disc.spb
+        self.model, self.disc, self.dt = model, disc, dt
+        self.stress_n = sub.phi @ points.stress
+        self.state_n = {k: sub.phi @ v for k, v in points.state.items()}
+        self.p_n = spb.phi @ points.p
+        self.grad_p_n = _pressure_gradient(spb, points.p)
+        self.terms = _nitsche_terms(model, disc, dt, domain,
+                                    (self.stress_n, self.state_n["v"]))
+
+    def residual(self, du, p, gaps, timings):
+        """Residual coefficients (G, 3, 3) of the iterate ``du``, ``p`` with the gaps
+        (G, 3) of ``(ux, uy, p_w)``."""
+        model, disc, fluid = self.model, self.disc, self.model.case.fluid
+        (self.stress, _, self.material_tangent, self.J, self.Finv,
+         _) = material_update(model.material, self.stress_n, self.state_n,
+                              _gradient(disc.sub, du, len(p)), timings, "a boundary point")
+        p_b = disc.spb.phi @ p
+        self.total = weakform.total_stress(self.stress, p_b, fluid)
+        self.grad_p = _pressure_gradient(disc.spb, p)
+        self.flux = weakform.residual(self.total, self.J, self.Finv, disc.bp.weights, p_b,
+                                      self.p_n, self.grad_p, fluid, self.dt, model.beta,
+                                      self.grad_p_n, self.state_n["v"])
+        return self.terms.residual(self.flux, gaps)
+
+    def tangent(self):
+        """Tangent coefficients (:class:`soil.weakform.Coefficients` of 3 x 3 fields) at
+        the last :meth:`residual`: :meth:`efg.nitsche.Nitsche.tangent` of the weak form's
+        tangent at the boundary points."""
+        c = weakform.tangent(self.material_tangent, self.stress, self.total, self.J,
+                             self.Finv, self.disc.bp.weights, self.model.case.fluid,
+                             self.dt, self.model.beta, self.state_n["v"], self.grad_p)
+        return self.terms.tangent(c)
+
+    def reaction(self, gaps):
+        """Force of the support on the soil at each point (G, 3) at the last
+        :meth:`residual` (:meth:`efg.nitsche.Nitsche.reaction`)."""
+        return self.terms.reaction(self.flux, gaps)
 
 
-def _tangent(model, disc, stress, total, tangent, J, Finv, dt, alpha_u, alpha_p, v_n,
-             grad_p):
+def _nitsche_terms(model, disc, dt, domain, boundary):
+    """:class:`efg.nitsche.Nitsche` of a step on ``(ux, uy, p_w)`` (see :class:`_Nitsche`);
+    ``domain`` and ``boundary`` are the start-of-step ``(stress, v)`` at the integration
+    and the boundary points."""
+    fluid, sc, bc, bp = model.case.fluid, model.scales, disc.bc, disc.bp
+    compressibility = (fluid.storage + fluid.biot_alpha**2 / sc.modulus) * sc.h**2
+    (stress, v), (stress_b, v_b) = domain, boundary
+
+    def darcy(v, extra=0.0):         # (0, 1 + k, 0, 1 + k) of one field, no weight
+        value = dt * fluid.mobility_at(v)[0] + extra
+        return weakform.Coefficients.of({(0, 1 + k, 0, 1 + k): value for k in range(2)},
+                                        (1, 1))
+
+    mask = np.column_stack([bc.constrained[:, 0], bc.constrained[:, 1] | bc.rigid,
+                            bc.drained])
+    D = _elastic_operator(model.material, stress_b, v_b).columns()
+    for (_, s, _, t), value in darcy(v_b).columns().items():
+        D[2, s, 2, t] = -value                     # the continuity equation's sign
+    terms = nitsche.Nitsche.build(bp, mask, weakform.Coefficients.of(D, (3, 3)),
+                                  np.zeros(3))
+    u = range(2)
+    lam_u = nitsche.largest_eigenvalue(
+        (disc.su, disc.w, _elastic_operator(model.material, stress, v)),
+        (disc.sub, bp.weights, terms.operator.block(u, u)))
+    lam_p = nitsche.largest_eigenvalue(
+        (disc.sp, disc.w, darcy(v, compressibility)),
+        (disc.spb, bp.weights, nitsche.flux_operator(bp, mask[:, 2:],
+                                                     darcy(v_b, compressibility))))
+    return replace(terms, beta=nitsche.SAFETY * np.array([lam_u, lam_u, -lam_p]))
+
+
+def _elastic_operator(material, stress, v):
+    """The gradient operator (:func:`efg.nitsche.gradient_operator`) of the material's
+    isotropic elastic moduli at the states ``(stress, v)``: the gradient terms of 2 x 2
+    fields at the P points [kPa]."""
+    p, _ = invariants(stress)
+    K, G = material.moduli(p, v)
+    return nitsche.gradient_operator(nitsche.isotropic(*np.broadcast_arrays(K, G, p)[:2]))
+
+
+def _pressure_gradient(shape, p):
+    """``grad p`` (P, 2) at the shape functions' points [kPa/m]."""
+    return np.stack([shape.dphi_dx @ p, shape.dphi_dy @ p], 1)
+
+
+def _tangent(model, disc, stress, total, tangent, J, Finv, dt, v_n, grad_p, boundary):
     """The Newton tangent of ``(ux, uy, p_w)`` (fields blocked) at the current iterate:
-    :func:`soil.weakform.tangent` in the domain, the penalties on the boundary."""
-    bc = disc.bc
+    :func:`soil.weakform.tangent` in the domain, the coefficients ``boundary``
+    (:class:`soil.weakform.Coefficients` of 3 x 3 fields) of the essential conditions at
+    the boundary points."""
     coeff = weakform.tangent(tangent, stress, total, J, Finv, disc.w, model.case.fluid, dt,
                              model.beta, v_n, grad_p)
-    pen = np.zeros((len(disc.bp.weights), 3, 3, 3, 3))
-    constrained = bc.constrained | np.column_stack([0 * bc.rigid, bc.rigid]).astype(bool)
-    pen[:, :2, :, :2, :] = penalty_coefficients(disc.bp, constrained, alpha_u)
-    pen[:, 2, 0, 2, 0] = -alpha_p * disc.bp.weights * bc.drained
-    K = disc.tangent(coeff, pen)
+    K = disc.tangent(coeff, boundary)
     if not model.tau:
         return K
     n = disc.fluctuation.shape[0]
@@ -340,7 +504,9 @@ def _uniqueness(model, disc, K, n):
 
 
 def _roundoff(disc, points, du, du_bar, p, plate, alpha_u, alpha_p, rigid_w):
-    """Round-off level of the penalty forces in the residual rows, (2n,), (n,) and a float.
+    """Round-off level of the penalty forces in the residual rows, (2n,), (n,) and a float
+    (with Nitsche's method, alpha is its beta, some 10^5 times smaller: the level is then
+    far below the tolerance).
 
     A penalty force ``phi^T (alpha w gap)`` has ``alpha`` about ``penalty`` (1e6) times the
     stiffness, and its gap is a difference of displacements (or pressures) of the size of
@@ -403,28 +569,33 @@ class _Discretisation:
         """Block name: its (test, trial) shape functions, domain then boundary points."""
         if self.shared:
             return {"domain": ((self.tu, self.su), (self.sub, self.sub))}
-        return {"uu": ((self.tu, self.su), (self.sub, self.sub)), "up": ((self.tu, self.sp),),
-                "pu": ((self.tp, self.su),), "pp": ((self.tp, self.sp), (self.spb, self.spb))}
+        return {"uu": ((self.tu, self.su), (self.sub, self.sub)),
+                "up": ((self.tu, self.sp), (self.sub, self.spb)),
+                "pu": ((self.tp, self.su), (self.spb, self.sub)),
+                "pp": ((self.tp, self.sp), (self.spb, self.spb))}
 
     def block(self, name, coeff, boundary):
-        """One block's matrix from its domain (and boundary) coefficients."""
+        """One block's matrix from its domain and boundary coefficients (a boundary block
+        without terms, such as the penalty's u-p coupling, adds nothing)."""
         pattern, pairs = self.patterns[name], self.blocks[name]
         values = None
         for (test, trial), c in zip(pairs, (coeff, boundary)):
             values = scatter(pattern, test, trial, c, values)
-        return pattern.matrix(values, coeff.shape[1], coeff.shape[3])
+        return pattern.matrix(values, *coeff.fields)
 
     def tangent(self, coeff, boundary):
-        """Tangent of ``(ux, uy, p_w)``, fields blocked, from the integrand coefficients at
-        the integration points (M, 3, 3, 3, 3) and the boundary points (G, 3, 3, 3, 3)."""
+        """Tangent of ``(ux, uy, p_w)``, fields blocked, from the integrand coefficients
+        (:class:`soil.weakform.Coefficients` of 3 x 3 fields) at the integration points and
+        at the boundary points; with separate u and p_w shape functions, each block takes
+        a copy of its own terms (Nitsche's couple u and p_w on the boundary too)."""
         if self.shared:
             return self.block("domain", coeff, boundary)
-        u, p = slice(0, 2), slice(2, 3)
+        u, p = range(0, 2), range(2, 3)
         return sp.bmat([
-            [self.block("uu", coeff[:, u, :, u], boundary[:, u, :, u]),
-             self.block("up", coeff[:, u, :, p], None)],
-            [self.block("pu", coeff[:, p, :, u], None),
-             self.block("pp", coeff[:, p, :, p], boundary[:, p, :, p])]], format="csr")
+            [self.block("uu", coeff.block(u, u), boundary.block(u, u)),
+             self.block("up", coeff.block(u, p), boundary.block(u, p))],
+            [self.block("pu", coeff.block(p, u), boundary.block(p, u)),
+             self.block("pp", coeff.block(p, p), boundary.block(p, p))]], format="csr")
 
 
 @dataclass
@@ -471,7 +642,7 @@ def _discretise(model, nodes, evaluation, timings, quad=None):
             tp = tu if same else vci.corrected(sp_, quad.weights, spb, bp.weights, bp.normal)
         at = build(evaluation)
         n = len(nodes)
-        at_points = _AtPoints(_rows(at, slice(0, n)), _rows(at, slice(n, None)))
+        at_points = _AtPoints(at.subset(slice(0, n)), at.subset(slice(n, None)))
         disc = _Discretisation(quad.weights, su, sp_, tu, tp, bp, sub, spb,
                                conditions(case, bp, model.initial_bp), at_points, {},
                                quad.cell)
@@ -481,32 +652,26 @@ def _discretise(model, nodes, evaluation, timings, quad=None):
     return disc
 
 
-def _rows(shape, rows):
-    """The shape functions at a slice of the evaluation points."""
-    return replace(shape, phi=shape.phi[rows], dphi_dx=shape.dphi_dx[rows],
-                   dphi_dy=shape.dphi_dy[rows], rcond=shape.rcond[rows])
-
-
-def _bordered(K, disc, n, rigid_w, c_mean, pin):
-    """Append the rigid plate's settlement and the mean-pressure multiplier, if any."""
+def _bordered(K, plate, c_mean, pin):
+    """Append the rigid plate's settlement (``plate``: its column, row and corner, or
+    None) and the mean-pressure multiplier (if ``pin``) to the tangent K of ``(ux, uy,
+    p_w)``."""
     cols, rows, corner = [], [], []
-    size = K.shape[0]
-    if disc.bc.rigid.any():
-        c = np.zeros(size)
-        c[n:2 * n] = -(disc.sub.phi.T @ rigid_w)
-        cols.append(c)
-        rows.append(c)
-        corner.append(rigid_w.sum())
+    n = K.shape[0] // 3
+    if plate is not None:
+        cols.append(plate[0])
+        rows.append(plate[1])
+        corner.append(plate[2])
     if pin:
-        c = np.zeros(size)
+        c = np.zeros(3 * n)
         c[2 * n:3 * n] = c_mean
         cols.append(c)
         rows.append(c)
         corner.append(0.0)
     if not cols:
         return K
-    C = sp.csc_matrix(np.column_stack(cols))
-    return sp.bmat([[K, C], [C.T, sp.diags(corner)]], format="csc")
+    C, B = sp.csc_matrix(np.column_stack(cols)), sp.csr_matrix(np.vstack(rows))
+    return sp.bmat([[K, C], [B, sp.diags(corner)]], format="csc")
 
 
 def _gradient(shape, du, n):

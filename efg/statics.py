@@ -1,9 +1,11 @@
 """Static linear elasticity with EFG (plane strain): the proving ground of the EFG core.
 
-One solve of ``(K + K_penalty) u = f_traction + f_penalty`` on the case's nodes, with the
-case's ``[efg]`` settings (weight, scale factor, background cells, Gauss order, penalty,
-gradient correction: with ``vci`` the stiffness pairs corrected test gradients with MLS
-trial gradients and is not symmetric; SuperLU solves it).
+One solve of ``(K + K_essential) u = f_traction + f_essential`` on the case's nodes, with
+the case's ``[efg]`` settings (weight, scale factor, background cells, Gauss order,
+essential conditions by penalty or by Nitsche's method (:mod:`efg.nitsche`, reference
+operator the elastic stiffness itself), gradient correction: with ``vci`` the stiffness
+pairs corrected test gradients with MLS trial gradients and is not symmetric; SuperLU
+solves it).
 Prescribed displacements are those of the case at ``time.end``: ``fixed`` is zero,
 ``prescribed`` is ``L x t_end`` and ``exact`` comes from the case's ``[exact]`` solution,
 which also gives ``exact`` tractions and the reference for the error norms.
@@ -13,12 +15,13 @@ parameters ``u_J``.
 """
 
 import time
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 import scipy.sparse.linalg as spla
 
-from efg import quadrature, vci
+from efg import nitsche, quadrature, vci
 from efg.assembly import Pattern, elasticity_coefficients, scatter
 from efg.boundary import (boundary_points, conditions, load_vector, penalty_coefficients,
                           segment_edges)
@@ -58,14 +61,14 @@ def solve(case):
     if settings.correction == "vci":
         test = vci.corrected(shape, quad.weights, shape_b, bp.weights, bp.normal)
     constrained, u_bar, traction, loaded = boundary_data(case, bp, exact)
-    alpha = penalty_factor(material, case, settings.penalty)
     pattern = Pattern.build((test, shape), (shape_b, shape_b))
     values = scatter(pattern, test, shape,
                      elasticity_coefficients(quad.weights, material.stiffness))
-    K = pattern.matrix(scatter(pattern, shape_b, shape_b,
-                               penalty_coefficients(bp, constrained, alpha), values), 2, 2)
-    rhs = (load_vector(shape_b.phi, bp, traction, loaded)
-           + load_vector(shape_b.phi, bp, alpha * u_bar, constrained))
+    essential = _nitsche if settings.essential == "nitsche" else _penalty
+    boundary, f_essential, factors = essential(case, material, (shape, quad.weights),
+                                               shape_b, bp, constrained, u_bar)
+    K = pattern.matrix(scatter(pattern, shape_b, shape_b, boundary, values), 2, 2)
+    rhs = load_vector(shape_b.phi, bp, traction, loaded) + f_essential
     coefficients = spla.spsolve(K.tocsc(), rhs)
     wall = time.perf_counter() - tic
 
@@ -76,12 +79,43 @@ def solve(case):
     errors = error_norms(shape, quad.weights, coefficients, material, exact, quad.points,
                          at_nodes, u_nodes, nodes) if exact else {}
     summary = {"steps": 1, "dofs": 2 * n, "integration_points": len(quad.weights),
-               "penalty_alpha": alpha, "timings": {"solve_s": wall}, "errors": errors}
+               **factors, "timings": {"solve_s": wall}, "errors": errors}
     history = pd.DataFrame([{"time": case.times()[-1], **errors}])
     snapshot = Snapshot(case.times()[-1], nodes + u_nodes,
                         {"u": u_nodes, "stress": stress_nodes,
                          "support_radius": at_nodes.support})
     return Result(case, "efg", settings.to_dict(), history, [snapshot], summary)
+
+
+def _penalty(case, material, domain, shape_b, bp, constrained, u_bar):
+    """Penalty coefficients (:class:`soil.weakform.Coefficients` of 2 x 2 fields at the G
+    boundary points), right-hand side (2N,) and factor."""
+    alpha = penalty_factor(material, case, case.efg.penalty)
+    return (penalty_coefficients(bp, constrained, alpha),
+            load_vector(shape_b.phi, bp, alpha * u_bar, constrained),
+            {"penalty_alpha": alpha})
+
+
+def _nitsche(case, material, domain, shape_b, bp, constrained, u_bar):
+    """Nitsche coefficients (:class:`soil.weakform.Coefficients` of 2 x 2 fields at the G
+    boundary points), right-hand side (2N,) and beta [kPa/m]: the reference operator is
+    the stiffness itself, so the consistency and adjoint terms cancel in ``v K v``
+    (:mod:`efg.nitsche`).
+
+    The terms are linear in u: the right-hand side is minus the residual of u = 0, whose
+    flux is zero and gap ``-u_bar``, i.e. the terms of the gap ``u_bar``."""
+    shape, weights = domain
+    K, G = material.moduli()
+    D_b, D = (nitsche.gradient_operator(nitsche.isotropic(np.full(m, K), np.full(m, G)))
+              for m in (len(bp.weights), len(weights)))
+    terms = nitsche.Nitsche.build(bp, constrained, D_b, np.zeros(2))
+    beta = nitsche.SAFETY * nitsche.largest_eigenvalue(
+        (shape, weights, D), (shape_b, bp.weights, terms.operator))
+    terms = replace(terms, beta=np.full(2, beta))
+    r = terms.residual(np.zeros(u_bar.shape + (3,)), u_bar)
+    coeff = terms.tangent(elasticity_coefficients(bp.weights, material.stiffness))
+    return (coeff, np.concatenate([shape_b.tested(r[:, f]) for f in range(2)]),
+            {"nitsche_beta": beta})
 
 
 def boundary_data(case, bp, exact):

@@ -2,8 +2,9 @@
 
 A field's shape data are stacked as ``S[a, s, e, q]``: local basis function a, slot s
 (0: value, 1: d/dx, 2: d/dy on the basis' mesh), element e, quadrature point q. Block
-coefficients ``c[e, q, f, s, g, t]`` pair test field f, slot s with trial field g, slot t
-(the layout of the EFG solver's coefficients), quadrature weights included.
+coefficients are :class:`soil.weakform.Coefficients` at the ``E Q`` quadrature points
+(element-major), pairing test field f, slot s with trial field g, slot t, quadrature
+weights included.
 """
 
 from dataclasses import dataclass
@@ -41,15 +42,22 @@ class Shapes:
 
 
 def block(test, trial, coeff):
-    """The sparse block ``sum_q test.S[a, s] coeff[e, q, f, s, g, t] trial.S[b, t]``.
+    """The sparse block ``sum_q test.S[a, s] c[e q, f, s, g, t] trial.S[b, t]``.
 
     Rows ``f test.n + test.dofs[a]``, columns ``g trial.n + trial.dofs[b]``; batched
-    matrix products over (element, point, f, g).
+    matrix products over (element, point), one field pair ``(f, g)`` of ``coeff``
+    (:class:`soil.weakform.Coefficients`) at a time. Besides the element matrices (E, F,
+    G, a, b) it allocates, per pair, its slot matrices (E Q, 3, 3) and the products (E, Q,
+    a, b): never all field pairs' coefficients at once.
     """
-    Sa = test.S.transpose(2, 3, 0, 1)[:, :, None, None]              # (E, Q, 1, 1, a, s)
-    Sb = trial.S.transpose(2, 3, 1, 0)[:, :, None, None]             # (E, Q, 1, 1, t, b)
-    local = (Sa @ coeff.transpose(0, 1, 2, 4, 3, 5) @ Sb).sum(axis=1)  # (E, f, g, a, b)
-    E, F, G, nb_a, nb_b = local.shape
+    E, Q = test.S.shape[2:]
+    Sa = test.S.transpose(2, 3, 0, 1)                                # (E, Q, a, s)
+    Sb = trial.S.transpose(2, 3, 1, 0)                               # (E, Q, t, b)
+    F, G = coeff.fields
+    nb_a, nb_b = len(test.S), len(trial.S)
+    local = np.zeros((E, F, G, nb_a, nb_b))
+    for f, g in coeff.pairs:
+        local[:, f, g] = (Sa @ coeff.slots(f, g).reshape(E, Q, 3, 3) @ Sb).sum(axis=1)
     rows = np.arange(F)[:, None, None, None] * test.n + test.dofs.T[:, None, None, :, None]
     cols = np.arange(G)[:, None, None] * trial.n + trial.dofs.T[:, None, None, None, :]
     rows, cols = np.broadcast_arrays(rows, cols)

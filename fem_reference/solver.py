@@ -537,12 +537,10 @@ def _tangent(model, disc, current, x, stress, total, tangent, J, Finv, dt):
     E, Q = disc.dx.shape
     grad_p = disc.p.values(x[2 * disc.u.n:]).reshape(E * Q, 3)[:, 1:]
     c = weakform.tangent(tangent, stress, total, J, Finv, disc.dx.ravel(), model.case.fluid,
-                         dt, model.beta, current.state["v"], grad_p).reshape(E, Q, 3, 3, 3, 3)
-    u, p = slice(0, 2), slice(2, 3)
-    return sp.bmat([[block(disc.u, disc.u, c[:, :, u, :, u]),
-                     block(disc.u, disc.p, c[:, :, u, :, p])],
-                    [block(disc.p, disc.u, c[:, :, p, :, u]),
-                     block(disc.p, disc.p, c[:, :, p, :, p])]], format="csr")
+                         dt, model.beta, current.state["v"], grad_p)
+    fields = ((disc.u, range(0, 2)), (disc.p, range(2, 3)))         # (basis, fields)
+    return sp.bmat([[block(test, trial, c.block(f, g)) for trial, g in fields]
+                    for test, f in fields], format="csr")
 
 
 def _uniqueness(model, con, disc, K):
@@ -550,8 +548,7 @@ def _uniqueness(model, con, disc, K):
     (essential conditions eliminated, the plate included) over the initial P-wave modulus:
     the displacement block on the undrained constraint (the free pressure rows), against
     the H1 Gram matrix of the displacement basis (length scale: the body's height)."""
-    E, Q = disc.dx.shape
-    gram = h1_gram(disc.dx.ravel(), model.case.geometry.height).reshape(E, Q, 2, 3, 2, 3)
+    gram = h1_gram(disc.dx.ravel(), model.case.geometry.height)
     u = con.T[:, con.is_u][:2 * disc.u.n]
     G = u.T @ block(disc.u, disc.u, gram) @ u
     K = sp.csr_matrix(K)

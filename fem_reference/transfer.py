@@ -37,6 +37,7 @@ import numpy as np
 
 from fem_reference.assembly import Shapes, block
 from soil.linear import factorise
+from soil.weakform import Coefficients
 
 
 def recover(shapes, dx, values):
@@ -87,8 +88,7 @@ def project(shapes, dx, values):
     """
     E, Q = dx.shape
     F = values.shape[1]
-    mass = np.zeros((E, Q, 1, 3, 1, 3))
-    mass[:, :, 0, 0, 0, 0] = dx
+    mass = Coefficients.of({(0, 0, 0, 0): dx.ravel()}, (1, 1))
     lu = factorise(block(shapes, shapes, mass))
     loads = np.zeros((E, Q, F, 3))
     loads[..., 0] = dx[..., None] * values.reshape(E, Q, F)

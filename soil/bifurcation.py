@@ -26,6 +26,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from soil.errors import require
+from soil.weakform import Coefficients
 
 #: Unknowns (displacements) up to which :func:`restricted_eigenvalue` works densely.
 DENSE_LIMIT = 3000
@@ -80,7 +81,7 @@ def h1_gram(weights, length):
 
     ``(u, v) = int (u . v / length^2 + grad u : grad v) dOmega``, as coefficients
     ``c[m, f, s, g, t]`` of the test field f, slot s (value, d/dx, d/dy) and the trial
-    field g, slot t, the layout of :mod:`soil.weakform`.
+    field g, slot t (:class:`soil.weakform.Coefficients`).
 
     Parameters
     ----------
@@ -92,13 +93,12 @@ def h1_gram(weights, length):
 
     Returns
     -------
-    ndarray, shape (M, 2, 3, 2, 3)
+    soil.weakform.Coefficients
+        2 x 2 fields, the six terms ``(f, s, f, s)``: ``w / length^2`` for the value, ``w``
+        for each derivative [m2 per unit thickness; the value term: dimensionless].
     """
-    c = np.zeros((len(weights), 2, 3, 2, 3))
-    for f in range(2):
-        c[:, f, 0, f, 0] = weights / length**2
-        c[:, f, 1, f, 1] = c[:, f, 2, f, 2] = weights
-    return c
+    return Coefficients.of({(f, s, f, s): weights / length**2 if s == 0 else weights
+                            for f in range(2) for s in range(3)}, (2, 2))
 
 
 def _array(A):

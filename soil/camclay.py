@@ -14,10 +14,19 @@ Yield functions, written with the size ``p'c`` of the surface (its intercept on 
 Sign conventions: stress is tension positive, stored as ``(xx, yy, zz, xy)``; strain
 increments are Voigt vectors ``(xx, yy, zz, 2xy)``; p', q, p'c and ``eps_v^p`` are
 compression positive. Units are those of the case (p'0 sets the stress unit).
+
+Each equation has one home, a numba function of scalars: :func:`yield_function` (the
+surface and its derivatives), :func:`surface_size`, :func:`hardening` and
+:func:`mean_volume`. The return mapping (:func:`_return_mapping`, a Newton iteration per
+point) and the methods of :class:`CamClay` call them. numba caches their machine code in
+``soil/__pycache__``; it is compiled again when this file changes.
 """
 
+import math
+from collections import namedtuple
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from soil.errors import ConvergenceError, InputError, require
@@ -26,6 +35,21 @@ from soil.kinematics import (DEVIATORIC, IDENTITY, deviator, double_dot, hughes_
 from soil.material import Material
 
 MODELS = ("original", "modified")
+
+#: A clay's parameters as the numba functions read them (:attr:`CamClay.constants`):
+#: ``modified`` (bool), M, lambda, kappa and MD.
+Constants = namedtuple("Constants", "modified M lam kappa MD")
+
+#: Status of a point after the return mapping.
+CONVERGED, NOT_CONVERGED, SINGULAR = 0, 1, 2
+
+#: The local problem a point solves: elastic (dgamma = 0), plastic on the smooth surface,
+#: plastic on the vertex q = 0 of the original surface.
+ELASTIC, SMOOTH, VERTEX = 0, 1, 2
+
+#: numba options of every function here: division by zero gives inf or nan (a diverging
+#: iteration ends in a status, not an exception inside numba).
+jit = numba.njit(cache=True, error_model="numpy")
 
 
 @dataclass(frozen=True)
@@ -126,16 +150,21 @@ class CamClay(Material):
             return K, np.full_like(K, self.G)
         return K, 1.5 * (1 - 2 * self.nu) / (1 + self.nu) * K
 
+    @property
+    def constants(self):
+        """The parameters the numba functions read, as :data:`Constants`."""
+        return Constants(self.model == "modified", float(self.M), float(self.lam),
+                         float(self.kappa), float(self.MD))
+
     def hardening(self, v):
-        """``theta`` in ``dp'c / p'c = theta d eps_v^p`` (compression positive)."""
-        if self.model == "modified":
-            return v / (self.lam - self.kappa)
-        return np.full_like(np.asarray(v, dtype=float), 1.0 / self.MD)
+        """``theta`` in ``dp'c / p'c = theta d eps_v^p`` (compression positive) at
+        specific volumes v (array or scalar): :func:`hardening` on each."""
+        return _elementwise(_hardenings, self.constants, v)
 
     def yield_value(self, stress, state):
         """Normalised yield function (<= 0 inside): dimensionless for both models."""
         p, q = invariants(stress)
-        return self._f(p, q, state["pc"], 1.0 / state["pc"] ** 2)[0]
+        return _elementwise(_yield_values, self.constants, p, q, state["pc"])
 
     def admissible(self, stress, state):
         """The state with p'c raised where the stress lies outside the yield surface, to
@@ -165,11 +194,9 @@ class CamClay(Material):
         return {**state, "pc": np.maximum(state["pc"], self.size(p, q))}
 
     def size(self, p, q):
-        """The size p'c of the yield surface through ``(p', q)``: ``p' exp(q / (M p'))``
-        (original), ``p' + q^2 / (M^2 p')`` (modified)."""
-        if self.model == "original":
-            return p * np.exp(q / (self.M * p))
-        return p + q**2 / (self.M**2 * p)
+        """The size p'c of the yield surface through ``(p', q)`` (arrays or scalars):
+        :func:`surface_size` on each."""
+        return _elementwise(_sizes, self.constants, p, q)
 
     def volume(self, p, pc, anchor):
         """Specific volume of a state ``(p', p'c)`` on the swelling line of p'c's normal
@@ -204,12 +231,13 @@ class CamClay(Material):
 
         v = self.v0 if v is None else v
         K, G = self.moduli(self.p0, v)
-        p = self.p0
-        dv = (self.lam - self.kappa) / v if self.model == "modified" else self.MD
-        if self.model == "original":
-            flow = lambda eta: 1.0 / (self.M - eta)             # d eps_q^p / d eps_v^p
-        else:
-            flow = lambda eta: 2 * eta / (self.M**2 - eta**2)
+        p, c = float(self.p0), self.constants
+        dv = 1.0 / hardening(c, float(v))[0]                    # d eps_v^p per d ln p'c
+
+        def flow(eta):                                # d eps_q^p / d eps_v^p = f_q / f_p
+            _, fp, fq = yield_function(c, p, eta * p, surface_size(c, p, eta * p), 1.0)[:3]
+            return fq / fp
+
         mismatch = lambda eta: (eta * p / (3 * G) + dv * flow(eta)
                                 - 2 / 3 * (p / K + dv))
         if mismatch(0.0) > 0:
@@ -220,25 +248,13 @@ class CamClay(Material):
         eta = brentq(mismatch, 0.0, self.M * (1 - 1e-12))
         return float((3 - eta) / (3 + 2 * eta))
 
-    def _f(self, p, q, pc, scale):
-        """Yield function and its derivatives ``(f, f_p, f_q, f_pc, f_pp, f_pq, f_qq, f_ppc)``.
-
-        ``scale`` multiplies the modified surface (it keeps f dimensionless).
-        """
-        M = self.M
-        if self.model == "original":
-            f = np.log(p / pc) + q / (M * p)
-            zero = np.zeros_like(p)
-            return (f, 1 / p - q / (M * p**2), 1 / (M * p), -1 / pc,
-                    -1 / p**2 + 2 * q / (M * p**3), -1 / (M * p**2), zero, zero)
-        s = scale
-        f = s * (q**2 / M**2 + p * (p - pc))
-        return (f, s * (2 * p - pc), s * 2 * q / M**2, -s * p,
-                2 * s + 0 * p, 0 * p, 2 * s / M**2 + 0 * p, -s + 0 * p)
-
     # -- incremental update ------------------------------------------------------------
     def update(self, stress, state, dstrain, dspin, tol=1e-11, max_iter=60):
         """Integrate one step on every point: implicit return mapping in (p', q).
+
+        The stress is rotated (Hughes-Winget) and the elastic trial formed on whole arrays;
+        the numba kernel :func:`_return_mapping` then solves each point's local problem in
+        (ln p', q, ln p'c, dgamma) by Newton's method and forms its consistent tangent.
 
         Parameters
         ----------
@@ -262,114 +278,28 @@ class CamClay(Material):
         tangent : ndarray, shape (N, 4, 4)
             Consistent tangent ``d sigma / d dstrain`` at fixed spin (Voigt, engineering
             shear in the strain), for Newton's method in the solvers.
+
+        Raises
+        ------
+        ConvergenceError
+            Where a point starts the step at p' <= 0, or its Newton iteration does not
+            converge or meets a singular local Jacobian.
         """
         stress = hughes_winget(stress, dspin)
         dstrain = np.asarray(dstrain, dtype=float)
         p_n, _ = invariants(stress)
-        pc_n, v_n = state["pc"], state["v"]
+        pc_n, v_n = (np.ascontiguousarray(state[key], dtype=float) for key in ("pc", "v"))
         if not np.all(p_n > 0):
             raise ConvergenceError(f"Cam-clay needs p' > 0 at every point; a point "
                                    f"starts the step at p' = {p_n.min():.3g}")
-
         dev = dstrain[:, :3].sum(axis=1)
-        vbar, dvbar = _mean_volume(v_n, dev)
-        K_n, G = self.moduli(p_n, v_n)
+        _, G = self.moduli(p_n, v_n)
         s_tr = deviator(stress) + 2 * G[:, None] * (dstrain @ DEVIATORIC.T)
         q_tr = np.sqrt(1.5 * double_dot(s_tr, s_tr))
-        scale = 1.0 / pc_n**2
-        p_tr = p_n * np.exp(-vbar * dev / self.kappa)
-
-        plastic = self._f(p_tr, q_tr, pc_n, scale)[0] > tol
-        vertex = np.zeros_like(plastic)
-        x = np.stack([np.log(p_tr), q_tr, np.log(pc_n), np.zeros_like(p_n)], axis=1)
-        args = (p_n, pc_n, q_tr, dev, vbar, dvbar, G, scale)
-        x, J, dRdy = self._solve_local(x, plastic, vertex, args, tol, max_iter)
-        if self.model == "original":  # returns past the apex land on the vertex q = 0
-            vertex = plastic & (x[:, 1] < 0)
-            if vertex.any():
-                x[vertex, 1] = 0.0
-                x, J, dRdy = self._solve_local(x, plastic, vertex, args, tol, max_iter)
-
-        p, q, pc, dg = np.exp(x[:, 0]), x[:, 1], np.exp(x[:, 2]), x[:, 3]
-        dx = -np.linalg.solve(J, dRdy)  # (N, 4, 2): d(ln p, q, ln pc, dg)/d(dev, q_tr)
-        fqq = self._f(p, q, pc, scale)[6]
-        safe = q_tr > 1e-14 * p_n
-        n = np.where(safe[:, None], s_tr, 0.0) / np.where(safe, q_tr, 1.0)[:, None]
-        ratio = np.where(safe, q / np.where(safe, q_tr, 1.0),
-                         np.where(vertex, 0.0, 1.0 / (1.0 + 3 * G * dg * fqq)))
-
-        new_stress = -p[:, None] * IDENTITY + ratio[:, None] * s_tr
-        dp = p[:, None] * dx[:, 0, :]
-        dq = dx[:, 1, :]
-        m = IDENTITY
-        dp_de = dp[:, :1] * m + 3 * G[:, None] * dp[:, 1:] * n
-        dq_de = dq[:, :1] * m + 3 * G[:, None] * dq[:, 1:] * n
-        tangent = (-m[None, :, None] * dp_de[:, None, :]
-                   + n[:, :, None] * dq_de[:, None, :]
-                   + (2 * G * ratio)[:, None, None]
-                   * (DEVIATORIC - 1.5 * n[:, :, None] * n[:, None, :]))
-        new_state = {"pc": pc, "v": v_n * np.exp(dev)}
-        return new_stress, new_state, tangent
-
-    def _solve_local(self, x, plastic, vertex, args, tol, max_iter):
-        """Newton on ``R(x) = 0`` for x = (ln p', q, ln p'c, dgamma) on all points at once.
-
-        Overflow in a diverging iteration is not warned about: it ends in
-        :class:`ConvergenceError`.
-        """
-        with np.errstate(all="ignore"):
-            return self._newton(x, plastic, vertex, args, tol, max_iter)
-
-    def _newton(self, x, plastic, vertex, args, tol, max_iter):
-        for _ in range(max_iter):
-            R, J, dRdy = self._residual(x, plastic, vertex, *args)
-            if np.all(np.abs(R) < tol):
-                return x, J, dRdy
-            if not np.all(np.isfinite(R)):
-                break
-            try:
-                step = np.linalg.solve(J, -R[:, :, None])[:, :, 0]
-            except np.linalg.LinAlgError:
-                raise ConvergenceError("Cam-clay return mapping met a singular local "
-                                       "Jacobian: reduce the strain increment per step") from None
-            step[:, [0, 2]] = np.clip(step[:, [0, 2]], -0.5, 0.5)
-            x = x + step
-        bad = int(np.sum(np.any(np.abs(R) >= tol, axis=1)))
-        raise ConvergenceError(
-            f"Cam-clay return mapping did not converge at {bad} point(s) in {max_iter} "
-            "iterations: reduce the time step (strain increment per step)")
-
-    def _residual(self, x, plastic, vertex, p_n, pc_n, q_tr, dev, vbar, dvbar, G, scale):
-        """Local residual, its Jacobian and its derivative with respect to (dev, q_tr)."""
-        p, q, pc, dg = np.exp(x[:, 0]), x[:, 1], np.exp(x[:, 2]), x[:, 3]
-        f, fp, fq, fpc, fpp, fpq, fqq, fppc = self._f(p, q, pc, scale)
-        a = vbar / self.kappa
-        theta = self.hardening(vbar)
-        n = len(p)
-        R = np.empty((n, 4))
-        J = np.zeros((n, 4, 4))
-        dRdy = np.zeros((n, 4, 2))
-        # volumetric elasticity: ln p = ln p_n - (vbar/kappa)(dev - deps_v^p)
-        R[:, 0] = x[:, 0] - np.log(p_n) + a * (dev + dg * fp)
-        J[:, 0] = np.stack([1 + a * dg * fpp * p, a * dg * fpq, a * dg * fppc * pc, a * fp], 1)
-        dRdy[:, 0, 0] = (vbar + dvbar * (dev + dg * fp)) / self.kappa
-        # deviatoric radial return: q = q_tr - 3 G dg f_q (or q = 0 on the vertex)
-        R[:, 1] = np.where(vertex, q, q - q_tr + 3 * G * dg * fq) / p_n
-        J[:, 1] = np.where(vertex[:, None], np.array([0, 1.0, 0, 0]),
-                           np.stack([3 * G * dg * fpq * p, 1 + 3 * G * dg * fqq,
-                                     0 * p, 3 * G * fq], 1)) / p_n[:, None]
-        dRdy[:, 1, 1] = np.where(vertex, 0.0, -1.0 / p_n)
-        # hardening: ln pc = ln pc_n + theta deps_v^p
-        R[:, 2] = x[:, 2] - np.log(pc_n) - theta * dg * fp
-        J[:, 2] = np.stack([-theta * dg * fpp * p, -theta * dg * fpq,
-                            1 - theta * dg * fppc * pc, -theta * fp], 1)
-        if self.model == "modified":
-            dRdy[:, 2, 0] = -dvbar / (self.lam - self.kappa) * dg * fp
-        # consistency f = 0 on plastic points, dgamma = 0 on elastic ones
-        R[:, 3] = np.where(plastic, f, dg)
-        J[:, 3] = np.where(plastic[:, None], np.stack([fp * p, fq, fpc * pc, 0 * p], 1),
-                           np.array([0, 0, 0, 1.0]))
-        return R, J, dRdy
+        new_stress, pc, tangent, status = _return_mapping(
+            self.constants, s_tr, q_tr, p_n, pc_n, v_n, dev, G, float(tol), int(max_iter))
+        _raise_on(status, max_iter)
+        return new_stress, {"pc": pc, "v": v_n * np.exp(dev)}, tangent
 
     # -- continuum (rate) form, for the stress-point driver ------------------------------
     def rates(self, stress, state, D):
@@ -398,21 +328,336 @@ class CamClay(Material):
             sdot = 2 * G * DEVIATORIC @ D
             qdot = np.sqrt(1.5 * double_dot(sdot, sdot))
             nhat = sdot / qdot if qdot > 0 else np.zeros(4)
-        _, fp, fq, fpc = self._f(p, q, pc, 1.0 / pc**2)[:4]
+        c, p, q, pc = self.constants, float(p), float(q), float(pc)
+        _, fp, fq, fpc = yield_function(c, p, q, pc, 1.0 / pc**2)[:4]
         N = -fp * IDENTITY / 3 + 1.5 * fq * np.array([1, 1, 1, 2.0]) * nhat
-        theta = self.hardening(v)
+        theta = hardening(c, float(v))[0]
         return Ce, N, -fpc * pc * theta * fp, theta * fp
 
 
-def _mean_volume(v, dev):
-    """Mean specific volume over a step, ``(v_{n+1} - v_n)/dev``, and its derivative.
+def _elementwise(kernel, constants, *arrays):
+    """``kernel(constants, *flat, out)`` on the broadcast arrays; the result has their
+    shape (a numpy scalar for scalars)."""
+    arrays = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in arrays))
+    out = np.empty(arrays[0].shape)
+    kernel(constants, *(np.ascontiguousarray(a).ravel() for a in arrays), out.ravel())
+    return out[()]
 
-    With it the elastic volumetric law ``dp'/p' = -v d eps_v / kappa`` integrates
-    exactly: ``p'_{n+1} = p'_n exp(-(v_{n+1} - v_n)/kappa)``.
+
+def _raise_on(status, max_iter):
+    """Raise :class:`ConvergenceError` if any point's status is not ``CONVERGED``."""
+    if not status.any():
+        return
+    if np.any(status == SINGULAR):
+        raise ConvergenceError("Cam-clay return mapping met a singular local Jacobian: "
+                               "reduce the strain increment per step")
+    bad = int(np.count_nonzero(status == NOT_CONVERGED))
+    raise ConvergenceError(
+        f"Cam-clay return mapping did not converge at {bad} point(s) in {max_iter} "
+        "iterations: reduce the time step (strain increment per step)")
+
+
+# -- the equations: numba functions of scalars ---------------------------------------------
+@jit
+def yield_function(c, p, q, pc, scale):
+    """Yield function and its derivatives at one point.
+
+    Parameters
+    ----------
+    c : Constants
+    p, q, pc : float
+        p', q and the size p'c of the surface (compression positive, stress unit).
+    scale : float
+        Multiplies the modified surface (``1 / p'c^2`` keeps f dimensionless); the
+        original's f is dimensionless and ignores it.
+
+    Returns
+    -------
+    tuple of float
+        ``(f, f_p, f_q, f_pc, f_pp, f_pq, f_qq, f_ppc)``; f <= 0 inside.
+
+    Examples
+    --------
+    >>> c = Constants(False, 1.42, 0.11, 0.04, 0.07 / 1.83)
+    >>> f, fp, fq = yield_function(c, 2.0, 1.42 * 2.0, 2.0 * math.e, 1.0)[:3]
+    >>> round(f, 12), round(fp, 12), fq == 1 / (1.42 * 2.0)    # critical state: f_p = 0
+    (0.0, 0.0, True)
     """
-    small = np.abs(dev) < 1e-5
-    x = np.where(small, 1.0, dev)
-    vbar = np.where(small, v * (1 + dev / 2 + dev**2 / 6), v * np.expm1(x) / x)
-    dvbar = np.where(small, v * (0.5 + dev / 3 + dev**2 / 8),
-                     v * (x * np.exp(x) - np.expm1(x)) / x**2)
-    return vbar, dvbar
+    M = c.M
+    if c.modified:
+        s = scale
+        return (s * (q * q / M**2 + p * (p - pc)), s * (2 * p - pc), 2 * s * q / M**2,
+                -s * p, 2 * s, 0.0, 2 * s / M**2, -s)
+    return (math.log(p / pc) + q / (M * p), 1 / p - q / (M * p * p), 1 / (M * p), -1 / pc,
+            -1 / p**2 + 2 * q / (M * p**3), -1 / (M * p * p), 0.0, 0.0)
+
+
+@jit
+def surface_size(c, p, q):
+    """The size p'c of the yield surface through ``(p', q)``: ``p' exp(q / (M p'))``
+    (original), ``p' + q^2 / (M^2 p')`` (modified); compression positive, stress unit."""
+    if c.modified:
+        return p + q * q / (c.M**2 * p)
+    return p * math.exp(q / (c.M * p))
+
+
+@jit
+def hardening(c, v):
+    """``theta`` in ``dp'c / p'c = theta d eps_v^p`` at specific volume v, and
+    ``d theta / d v``: ``v / (lambda - kappa)`` (modified), ``1 / MD`` (original)."""
+    if c.modified:
+        return v / (c.lam - c.kappa), 1.0 / (c.lam - c.kappa)
+    return 1.0 / c.MD, 0.0
+
+
+@jit
+def mean_volume(v, dev):
+    """Mean specific volume over a step, ``(v_{n+1} - v_n) / dev``, and its derivative
+    with respect to the volumetric strain increment dev (tension positive).
+
+    With ``v_{n+1} = v_n exp(dev)`` the elastic volumetric law ``dp'/p' = -v d eps_v /
+    kappa`` integrates exactly: ``p'_{n+1} = p'_n exp(-(v_{n+1} - v_n)/kappa)``.
+    """
+    if abs(dev) < 1e-5:
+        return v * (1 + dev / 2 + dev**2 / 6), v * (0.5 + dev / 3 + dev**2 / 8)
+    return v * math.expm1(dev) / dev, v * (dev * math.exp(dev) - math.expm1(dev)) / dev**2
+
+
+@jit
+def _yield_values(c, p, q, pc, out):
+    """:func:`yield_function`'s f on 1-D arrays, scaled by ``1 / p'c^2`` (modified)."""
+    for i in range(len(out)):
+        out[i] = yield_function(c, p[i], q[i], pc[i], 1.0 / pc[i] ** 2)[0]
+
+
+@jit
+def _sizes(c, p, q, out):
+    """:func:`surface_size` on 1-D arrays."""
+    for i in range(len(out)):
+        out[i] = surface_size(c, p[i], q[i])
+
+
+@jit
+def _hardenings(c, v, out):
+    """:func:`hardening`'s theta on a 1-D array."""
+    for i in range(len(out)):
+        out[i] = hardening(c, v[i])[0]
+
+
+# -- the return mapping: one point after another ---------------------------------------------
+@jit
+def _return_mapping(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter):
+    """Return mapping and consistent tangent of every point (numba kernel).
+
+    Parameters
+    ----------
+    c : Constants
+    s_tr : ndarray, shape (N, 4)
+        Trial deviatoric stress (tension positive, ``(xx, yy, zz, xy)``).
+    q_tr, p_n, pc_n, v_n, dev, G : ndarray, shape (N,)
+        Trial q; p', p'c (compression positive) and specific volume at the start of the
+        step; volumetric strain increment (extension positive); shear modulus at the
+        start of the step. Stresses and G in the case's stress unit.
+    tol : float
+        Tolerance on the scaled local residual.
+    max_iter : int
+        Newton iterations per solve.
+
+    Returns
+    -------
+    stress : ndarray, shape (N, 4)
+    pc : ndarray, shape (N,)
+    tangent : ndarray, shape (N, 4, 4)
+    status : ndarray of int8, shape (N,)
+        ``CONVERGED``, ``NOT_CONVERGED`` or ``SINGULAR``; the other outputs of a point
+        that did not converge are undefined.
+    """
+    n = len(p_n)
+    stress, pc, tangent = np.empty((n, 4)), np.empty(n), np.empty((n, 4, 4))
+    status = np.empty(n, np.int8)
+    x, work = np.empty(4), _workspace()
+    for i in range(n):
+        status[i], pc[i] = _point(c, s_tr[i], q_tr[i], p_n[i], pc_n[i], v_n[i], dev[i],
+                                  G[i], tol, max_iter, x, work, stress[i], tangent[i])
+    return stress, pc, tangent, status
+
+
+@jit
+def _workspace():
+    """Scratch of one point: residual R (4,), Jacobian J (4, 4), ``dR/d(dev, q_tr)``
+    (4, 2), LU factors (4, 4) and pivots (4,)."""
+    return (np.empty(4), np.empty((4, 4)), np.empty((4, 2)), np.empty((4, 4)),
+            np.empty(4, np.int64))
+
+
+@jit
+def _point(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter, x, work, stress, tangent):
+    """One point: elastic trial, Newton in x = (ln p', q, ln p'c, dgamma), the vertex
+    re-solve of the original model, then stress (4,) and tangent (4, 4) into the given
+    rows. Returns ``(status, p'c)``."""
+    vbar, dvbar = mean_volume(v_n, dev)
+    scale = 1.0 / pc_n**2
+    p_tr = p_n * math.exp(-vbar * dev / c.kappa)
+    kind = SMOOTH if yield_function(c, p_tr, q_tr, pc_n, scale)[0] > tol else ELASTIC
+    x[0], x[1], x[2], x[3] = math.log(p_tr), q_tr, math.log(pc_n), 0.0
+    known = (math.log(p_n), p_n, math.log(pc_n), q_tr, dev, vbar, dvbar, G, scale)
+    while True:  # one call site: numba compiles _newton once, for any kind
+        status = _newton(c, x, kind, known, tol, max_iter, work)
+        if status != CONVERGED or kind != SMOOTH or c.modified or x[1] >= 0:
+            break
+        kind, x[1] = VERTEX, 0.0  # returns past the apex land on the vertex q = 0
+    if status == CONVERGED and not _stress_and_tangent(c, x, kind, known, s_tr, work,
+                                                       stress, tangent):
+        status = SINGULAR
+    return status, math.exp(x[2])
+
+
+@jit
+def _newton(c, x, kind, known, tol, max_iter, work):
+    """Newton on ``R(x) = 0`` from x (updated in place), steps of ln p' and ln p'c
+    clipped to +-0.5; J and ``dR/dy`` in ``work`` are left at the solution.
+
+    Returns ``CONVERGED``, ``NOT_CONVERGED`` (also on a non-finite residual) or
+    ``SINGULAR``.
+    """
+    R, J, _, lu, piv = work
+    for _ in range(max_iter):
+        _residual(c, x, kind, known, work)
+        if _largest(R) < tol:
+            return CONVERGED
+        if not np.isfinite(_largest(R)):
+            return NOT_CONVERGED
+        if not _lu_factor(J, lu, piv):
+            return SINGULAR
+        for k in range(4):
+            R[k] = -R[k]
+        _lu_solve(lu, piv, R)
+        for k in range(4):
+            step = R[k]
+            if k != 1 and k != 3:
+                step = 0.5 if step > 0.5 else (-0.5 if step < -0.5 else step)
+            x[k] += step
+    return NOT_CONVERGED
+
+
+@jit
+def _largest(R):
+    """``max |R_k|``, nan if any entry is nan."""
+    big = 0.0
+    for r in R:
+        if abs(r) > big or r != r:
+            big = abs(r)
+    return big
+
+
+@jit
+def _residual(c, x, kind, known, work):
+    """Local residual R of a point's problem ``kind``, its Jacobian J and its derivative
+    with respect to (dev, q_tr), into ``work``."""
+    R, J, dRdy = work[0], work[1], work[2]
+    ln_p_n, p_n, ln_pc_n, q_tr, dev, vbar, dvbar, G, scale = known
+    p, q, pc, dg = math.exp(x[0]), x[1], math.exp(x[2]), x[3]
+    f, fp, fq, fpc, fpp, fpq, fqq, fppc = yield_function(c, p, q, pc, scale)
+    a = vbar / c.kappa
+    theta, dtheta_dv = hardening(c, vbar)
+    J.fill(0.0)
+    dRdy.fill(0.0)
+    # volumetric elasticity: ln p = ln p_n - (vbar/kappa)(dev - deps_v^p)
+    R[0] = x[0] - ln_p_n + a * (dev + dg * fp)
+    J[0, 0], J[0, 1], J[0, 2], J[0, 3] = (1 + a * dg * fpp * p, a * dg * fpq,
+                                          a * dg * fppc * pc, a * fp)
+    dRdy[0, 0] = (vbar + dvbar * (dev + dg * fp)) / c.kappa
+    # deviatoric radial return: q = q_tr - 3 G dg f_q (or q = 0 on the vertex)
+    if kind == VERTEX:
+        R[1], J[1, 1] = q / p_n, 1.0 / p_n
+    else:
+        R[1] = (q - q_tr + 3 * G * dg * fq) / p_n
+        J[1, 0], J[1, 1], J[1, 3] = (3 * G * dg * fpq * p / p_n,
+                                     (1 + 3 * G * dg * fqq) / p_n, 3 * G * fq / p_n)
+        dRdy[1, 1] = -1.0 / p_n
+    # hardening: ln pc = ln pc_n + theta deps_v^p
+    R[2] = x[2] - ln_pc_n - theta * dg * fp
+    J[2, 0], J[2, 1], J[2, 2], J[2, 3] = (-theta * dg * fpp * p, -theta * dg * fpq,
+                                          1 - theta * dg * fppc * pc, -theta * fp)
+    dRdy[2, 0] = -dtheta_dv * dvbar * dg * fp
+    # consistency f = 0 on plastic points, dgamma = 0 on elastic ones
+    if kind != ELASTIC:
+        R[3], J[3, 0], J[3, 1], J[3, 2] = f, fp * p, fq, fpc * pc
+    else:
+        R[3], J[3, 3] = dg, 1.0
+
+
+@jit
+def _stress_and_tangent(c, x, kind, known, s_tr, work, stress, tangent):
+    """Stress (4,) and consistent tangent (4, 4) at the solution x of a point; False
+    when its local Jacobian is singular.
+
+    The tangent follows from ``dx/dy = -J^-1 dR/dy`` with y = (dev, q_tr),
+    ``d dev / d eps = m`` and ``d q_tr / d eps = 3 G n``, n the unit trial direction.
+    """
+    R, _, dRdy, lu, piv = work
+    if not _lu_factor(work[1], lu, piv):
+        return False
+    for k in range(2):                      # dRdy becomes dx/dy
+        for i in range(4):
+            R[i] = -dRdy[i, k]
+        _lu_solve(lu, piv, R)
+        for i in range(4):
+            dRdy[i, k] = R[i]
+    _, p_n, _, q_tr, _, _, _, G, scale = known
+    p, q, pc, dg = math.exp(x[0]), x[1], math.exp(x[2]), x[3]
+    safe = q_tr > 1e-14 * p_n
+    inv_q = 1.0 / q_tr if safe else 0.0     # n = s_tr / q_tr, zero at q_tr = 0
+    if safe:
+        ratio = q / q_tr
+    elif kind == VERTEX:
+        ratio = 0.0
+    else:
+        ratio = 1.0 / (1.0 + 3 * G * dg * yield_function(c, p, q, pc, scale)[6])
+    for i in range(4):
+        stress[i] = -p * IDENTITY[i] + ratio * s_tr[i]
+    for i in range(4):
+        for j in range(4):
+            dp = p * (dRdy[0, 0] * IDENTITY[j] + 3 * G * dRdy[0, 1] * s_tr[j] * inv_q)
+            dq = dRdy[1, 0] * IDENTITY[j] + 3 * G * dRdy[1, 1] * s_tr[j] * inv_q
+            tangent[i, j] = (-IDENTITY[i] * dp + s_tr[i] * inv_q * dq + 2 * G * ratio
+                             * (DEVIATORIC[i, j] - 1.5 * s_tr[i] * s_tr[j] * inv_q**2))
+    return True
+
+
+@jit
+def _lu_factor(J, A, piv):
+    """LU factors of a 4 x 4 matrix J into A, with partial pivoting; False at a zero
+    pivot (exactly singular, as LAPACK's getrf reports)."""
+    for i in range(4):
+        for j in range(4):
+            A[i, j] = J[i, j]
+    for k in range(4):
+        m = k
+        for i in range(k + 1, 4):
+            if abs(A[i, k]) > abs(A[m, k]):
+                m = i
+        piv[k] = m
+        if A[m, k] == 0.0:
+            return False
+        for j in range(4):
+            A[k, j], A[m, j] = A[m, j], A[k, j]
+        for i in range(k + 1, 4):
+            A[i, k] /= A[k, k]
+            for j in range(k + 1, 4):
+                A[i, j] -= A[i, k] * A[k, j]
+    return True
+
+
+@jit
+def _lu_solve(A, piv, b):
+    """Solve ``A x = b`` in place from :func:`_lu_factor`'s factors."""
+    for k in range(4):
+        b[k], b[piv[k]] = b[piv[k]], b[k]
+    for i in range(1, 4):
+        for j in range(i):
+            b[i] -= A[i, j] * b[j]
+    for i in range(3, -1, -1):
+        for j in range(i + 1, 4):
+            b[i] -= A[i, j] * b[j]
+        b[i] /= A[i, i]

@@ -32,6 +32,10 @@ from soil.results import Result
 #: Newton tolerance on the scaled residuals (see :class:`Scales`).
 TOLERANCE = 1e-8
 MAX_ITERATIONS = 25
+#: Whether the first factorisation of a step is the symmetric one of ``sym(K)``
+#: (:func:`soil.linear.factorise`; every refactorisation is of ``K``). Off: the tangents
+#: are not symmetric enough for it to pay (README, "Speed").
+SYMMETRIC_FIRST = False
 #: Halvings of a failing time step before the run stops.
 MAX_CUTS = 6
 #: Phase timers of a run [s], ``summary["timings"]`` of both methods (plus ``total_s``):
@@ -149,7 +153,7 @@ def run(case, method, options, current, step, row, snapshot, summary, progress=T
         The solver's state at t = 0.
     step : callable
         ``step(current, t0, t1, stats) -> (current, iterations, residual)``, adding to
-        ``stats["timings"]`` (keys :data:`TIMERS`) and ``stats["factorisations"]``.
+        ``stats["timings"]`` (keys :data:`TIMERS`) and the counts of :func:`newton`.
     row, snapshot : callable
         As in :func:`march`.
     summary : dict
@@ -159,9 +163,11 @@ def run(case, method, options, current, step, row, snapshot, summary, progress=T
     -------
     Result
         Its summary holds ``steps``, ``tolerance``, ``linear_solver``, ``summary``, the
-        statistics of :func:`march`, ``factorisations`` and ``timings``.
+        statistics of :func:`march`, the counts of :func:`newton`
+        (``factorisations``, ``symmetric_factorisations``, ``perturbed_pivots``) and
+        ``timings``.
     """
-    stats = {"factorisations": 0, "timings": dict.fromkeys(TIMERS, 0.0)}
+    stats = {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
     tic = time.perf_counter()
     history, snapshots = march(case, current, lambda c, t0, t1: step(c, t0, t1, stats),
                                row, snapshot, stats, progress, desc=f"{method} {case.name}")
@@ -171,8 +177,23 @@ def run(case, method, options, current, step, row, snapshot, summary, progress=T
                    "linear_solver": identity(), **summary, **stats})
 
 
+def new_counts():
+    """The factorisation counts :func:`newton` adds to, at zero."""
+    return {"factorisations": 0, "symmetric_factorisations": 0, "perturbed_pivots": 0}
+
+
 def newton(system, stats):
     """Newton's method on one step's nonlinear system.
+
+    Modified Newton: a factorisation is kept while each iteration contracts the residual
+    (:func:`soil.linear.must_refactorise`), and the current tangent is factorised
+    otherwise. With :data:`SYMMETRIC_FIRST` (off by default) the first factorisation of
+    the step is the symmetric one of ``sym(K) = (K + K^T) / 2`` (half the factor of
+    ``K``'s on PARDISO), kept while it contracts like any other; once a factorisation
+    stalls, the step refactorises the full unsymmetric ``K``. The corrections of
+    ``sym(K)`` contract the residual at best by the spectral radius of
+    ``sym(K)^-1 (K - K^T) / 2``, those of ``K`` by the change of the tangent over the
+    step. SuperLU has no symmetric mode: every factorisation is of ``K``.
 
     Parameters
     ----------
@@ -186,7 +207,9 @@ def newton(system, stats):
           None);
         * ``advance(dx)``: add a correction to the unknowns.
     stats : dict
-        ``factorisations`` and ``timings`` (``assembly_s``, ``solve_s``) are added to.
+        Added to: ``factorisations`` (all of them), ``symmetric_factorisations`` (those of
+        ``sym(K)``), ``perturbed_pivots`` (summed over the factorisations; PARDISO's
+        ``iparm(14)``) and ``timings`` (``assembly_s``, ``solve_s``).
 
     Returns
     -------
@@ -216,7 +239,7 @@ def newton(system, stats):
     ...         return sp.csr_matrix(2 * self.x[None])
     ...     def advance(self, dx):
     ...         self.x = self.x + dx
-    >>> root, stats = Root(), {"factorisations": 0, "timings": dict.fromkeys(TIMERS, 0.0)}
+    >>> root, stats = Root(), {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
     >>> iterations, residual = newton(root, stats)
     >>> round(float(root.x[0]), 8), stats["factorisations"], bool(residual < TOLERANCE)
     (1.41421356, 2, True)
@@ -235,12 +258,20 @@ def newton(system, stats):
             with timed(stats["timings"], "assembly_s"):
                 K = system.tangent()
             with timed(stats["timings"], "solve_s"):
-                lu = factorise(K, groups=system.groups)
-            stats["factorisations"] += 1
+                lu = factorise(K, groups=system.groups,
+                               symmetric=SYMMETRIC_FIRST and lu is None)
+            _count(stats, lu)
         previous = residual
         with timed(stats["timings"], "solve_s"):
             dx = lu.solve(-R)
         system.advance(dx)
+
+
+def _count(stats, lu):
+    """Add the factorisation ``lu`` to the counts of :func:`newton`."""
+    stats["factorisations"] += 1
+    stats["symmetric_factorisations"] += lu.symmetric
+    stats["perturbed_pivots"] += lu.perturbed_pivots
 
 
 def material_update(material, stress, state, H, timings, where="an integration point"):

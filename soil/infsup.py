@@ -26,6 +26,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from soil.bifurcation import h1_gram
+from soil.weakform import Coefficients
 
 #: Eigenvalues ``lambda`` below this fraction of the largest are zero modes (beta below
 #: about 1e-3 of its largest value): far below the smallest non-zero value of the pairs
@@ -34,8 +35,8 @@ ZERO = 1e-6
 
 
 def coefficients(weights, length, perturbation=0.0):
-    """Integrand coefficients of ``S``, ``B``, ``T`` and a stabilisation ``C``, in the
-    layout ``c[m, f, s, g, t]`` of :mod:`soil.weakform` (slots value, d/dx, d/dy).
+    """Integrand coefficients of ``S``, ``B``, ``T`` and a stabilisation ``C``, as
+    :class:`soil.weakform.Coefficients` ``c[m, f, s, g, t]`` (slots value, d/dx, d/dy).
 
     Parameters
     ----------
@@ -49,20 +50,19 @@ def coefficients(weights, length, perturbation=0.0):
 
     Returns
     -------
-    gram : ndarray, shape (M, 2, 3, 2, 3)
-    divergence : ndarray, shape (M, 1, 3, 2, 3)
-        ``q div v``: pressure value against displacement gradients.
-    mass : ndarray, shape (M, 1, 3, 1, 3)
-    stabilisation : ndarray, shape (M, 1, 3, 1, 3)
-        ``perturbation grad p . grad q``.
+    gram : Coefficients
+        2 x 2 fields (:func:`soil.bifurcation.h1_gram`).
+    divergence : Coefficients
+        1 x 2 fields, ``q div v``: pressure value against displacement gradients.
+    mass : Coefficients
+        1 x 1 field, ``p q``.
+    stabilisation : Coefficients
+        1 x 1 field, ``perturbation grad p . grad q``.
     """
-    divergence = np.zeros((len(weights), 1, 3, 2, 3))
-    for f in range(2):
-        divergence[:, 0, 0, f, 1 + f] = weights
-    mass = np.zeros((len(weights), 1, 3, 1, 3))
-    mass[:, 0, 0, 0, 0] = weights
-    stabilisation = np.zeros((len(weights), 1, 3, 1, 3))
-    stabilisation[:, 0, 1, 0, 1] = stabilisation[:, 0, 2, 0, 2] = perturbation * weights
+    divergence = Coefficients.of({(0, 0, f, 1 + f): weights for f in range(2)}, (1, 2))
+    mass = Coefficients.of({(0, 0, 0, 0): weights}, (1, 1))
+    stabilisation = Coefficients.of({(0, s, 0, s): perturbation * weights for s in (1, 2)},
+                                    (1, 1))
     return h1_gram(weights, length), divergence, mass, stabilisation
 
 

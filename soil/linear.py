@@ -13,6 +13,15 @@ Two back-ends, one interface (:func:`factorise` returns an object with ``solve(b
 ``SOILWATER_LINEAR_SOLVER=superlu`` asks otherwise. Both solvers reuse a factorisation
 while it contracts the Newton residual at least :data:`CONTRACTION`-fold per iteration
 (modified Newton), and refactorise the current tangent otherwise.
+
+``factorise(K, groups, symmetric=True)`` asks for the cheaper symmetric factorisation of
+``sym(K) = (K + K^T) / 2``, for a tangent that is nearly symmetric: PARDISO factorises
+its upper triangle as symmetric indefinite (``mtype = -2``, LDL^T with Bunch-Kaufman 1x1
+and 2x2 pivots), half the factor entries of the LU of ``K``. Its solve is the solve of
+``sym(K)``, so a Newton correction carries the error of the unsymmetric part; the
+modified Newton iteration can start a step with it and falls back to ``K`` when it stops
+contracting (:data:`soil.coupling.SYMMETRIC_FIRST`, off: it does not pay on our
+tangents). SuperLU has no symmetric mode and factorises ``K``.
 """
 
 import os
@@ -33,6 +42,18 @@ CONTRACTION = 0.1
 #: refinement (8), pivots perturbed by 1e-13 (10), no scaling (11) and no weighted
 #: matching (13).
 NODE_BLOCKED = {1: 1, 2: 2, 5: 1, 8: 1, 10: 13, 11: 0, 13: 0}
+#: ``iparm`` of the symmetric indefinite factorisation (``mtype = -2``) in the node-blocked
+#: order: as :data:`NODE_BLOCKED`, with Bunch-Kaufman 1x1 and 2x2 pivots (21). The
+#: symmetric weighted matching (13 = 1) would cost four times the factorisation, and
+#: without the node order (METIS on the unknowns) the zero pressure block perturbs
+#: thousands of pivots and the solve fails.
+SYMMETRIC_NODE_BLOCKED = {**NODE_BLOCKED, 21: 1}
+#: ``iparm`` of the symmetric indefinite factorisation without ``groups``: METIS (2),
+#: pivots perturbed by 1e-8 (10), scaling (11) and symmetric weighted matching (13), which
+#: pair the zero pressure pivots of a P1/P1 saddle point with 2x2 blocks, Bunch-Kaufman
+#: pivots (21); refinement when pivots were perturbed (8 = 0). MKL recommends them for
+#: saddle-point problems; its defaults for ``mtype = -2`` (no matching) fail there.
+SYMMETRIC = {1: 1, 2: 2, 10: 8, 11: 1, 13: 1, 21: 1}
 #: PARDISO ``iparm`` of the ordering-only analysis of the node graph: own settings (1),
 #: METIS (2), the permutation returned in ``perm`` (5 = 2), no weighted matching (13).
 NODE_ORDERING = {1: 1, 2: 2, 5: 2, 13: 0}
@@ -105,8 +126,9 @@ def must_refactorise(lu, residual, previous):
     return lu is None or residual > CONTRACTION * previous
 
 
-def factorise(K, groups=None):
-    """Factorise the square sparse matrix ``K`` with the back-end of :func:`backend`.
+def factorise(K, groups=None, symmetric=False):
+    """Factorise the square sparse matrix ``K`` (or its symmetric part) with the back-end
+    of :func:`backend`.
 
     Parameters
     ----------
@@ -120,6 +142,17 @@ def factorise(K, groups=None):
         skipped (one step of iterative refinement instead: the modified Newton iteration
         refines the solution anyway). Unknowns of group -1 (a rigid
         plate, a Lagrange multiplier) are ordered last. SuperLU ignores ``groups``.
+    symmetric : bool
+        Factorise ``sym(K) = (K + K^T) / 2`` as symmetric indefinite (PARDISO,
+        :data:`SYMMETRIC_NODE_BLOCKED` or :data:`SYMMETRIC`): ``solve`` then solves with
+        ``sym(K)``. SuperLU has no symmetric mode and factorises ``K``.
+
+    Returns
+    -------
+    object
+        ``solve(b)``; ``symmetric``: whether it is the factorisation of ``sym(K)``;
+        ``perturbed_pivots``: pivots PARDISO perturbed (``iparm(14)``; 0 for SuperLU,
+        which does not perturb).
 
     Raises
     ------
@@ -135,25 +168,39 @@ def factorise(K, groups=None):
     True
     """
     if backend() == "pardiso":
-        return _Pardiso(K, groups)
-    try:
-        return spla.splu(sp.csc_matrix(K))
-    except RuntimeError as err:
-        raise ConvergenceError(f"the tangent is singular ({err})") from None
+        return _Pardiso(K, groups, symmetric)
+    return _SuperLU(K)
+
+
+class _SuperLU:
+    """SuperLU's LU factorisation of ``K`` (it has no symmetric mode)."""
+
+    symmetric, perturbed_pivots = False, 0
+
+    def __init__(self, K):
+        try:
+            self.lu = spla.splu(sp.csc_matrix(K))
+        except RuntimeError as err:
+            raise ConvergenceError(f"the tangent is singular ({err})") from None
+
+    def solve(self, b):
+        return self.lu.solve(b)
 
 
 class _Pardiso:
-    """A PARDISO factorisation of one matrix; its MKL memory is freed with the object."""
+    """A PARDISO factorisation of one matrix (of ``K``, or of ``sym(K)`` when
+    ``symmetric``); its MKL memory is freed with the object."""
 
-    def __init__(self, K, groups=None):
+    def __init__(self, K, groups=None, symmetric=False):
         import pypardiso
 
-        self.A = sp.csr_matrix(K, dtype=float)
+        self.symmetric = symmetric
+        self.A = _upper_symmetric(K) if symmetric else sp.csr_matrix(K, dtype=float)
         self.A.sort_indices()
-        self.solver = _solver()
+        self.solver = _solver(mtype=-2 if symmetric else 11)
+        for index, value in _settings(groups is not None, symmetric).items():
+            self.solver.set_iparm(index, value)
         if groups is not None:
-            for index, value in NODE_BLOCKED.items():
-                self.solver.set_iparm(index, value)
             self.solver.perm = _grouped_order(self.A, np.asarray(groups, np.int64)) + 1
         if not np.diff(self.A.indptr).all():
             raise ConvergenceError("the tangent is singular (it has an empty row)")
@@ -161,6 +208,7 @@ class _Pardiso:
             self._phase(12, np.zeros(self.A.shape[0]))
         except pypardiso.pardiso_wrapper.PyPardisoError as err:
             raise ConvergenceError(f"the tangent is singular ({err})") from None
+        self.perturbed_pivots = int(self.solver.get_iparm(14))
         # phase -1: all of MKL's memory for this solver; the default (phase 0) frees
         # only the factor and leaks the analysis of every factorisation (14 MB a step
         # on a 21 x 21 footing, 14 GB over a 41 x 41 run)
@@ -175,6 +223,24 @@ class _Pardiso:
         solve, at a cost that grows with the matrix; this object owns its matrix."""
         self.solver.set_phase(phase)
         return self.solver._call_pardiso(self.A, b)
+
+
+def _settings(grouped, symmetric):
+    """PARDISO's ``iparm`` for a factorisation in the node-blocked order (``grouped``) or
+    not, of ``K`` or of ``sym(K)``; an empty dict leaves MKL's defaults."""
+    if symmetric:
+        return SYMMETRIC_NODE_BLOCKED if grouped else SYMMETRIC
+    return NODE_BLOCKED if grouped else {}
+
+
+def _upper_symmetric(K):
+    """The upper triangle of ``sym(K) = (K + K^T) / 2`` in CSR, PARDISO's input for a
+    symmetric matrix: every diagonal entry is stored, zeros of a pressure block too."""
+    S = sp.coo_matrix((K + K.T) / 2, dtype=float)
+    upper, diagonal = S.row <= S.col, np.arange(K.shape[0])
+    return sp.csr_matrix((np.concatenate([S.data[upper], np.zeros(K.shape[0])]),
+                          (np.concatenate([S.row[upper], diagonal]),
+                           np.concatenate([S.col[upper], diagonal]))), shape=K.shape)
 
 
 def _solver(**options):

@@ -133,7 +133,11 @@ Schema (every case has the same one; unknown keys are an error)::
     cells = "delaunay"                # background cells: delaunay or squares
     order = 2                         # Gauss order (squares: per direction; triangles:
                                       # degree, at most 19)
+    essential = "penalty"             # essential conditions: "penalty" or "nitsche"
+                                      # (efg.nitsche: consistent, no factor to choose,
+                                      # a matrix on the stiffness's scale)
     penalty = 1e6                     # penalty factor relative to the stiffness scale
+                                      # (essential = "penalty")
     correction = "vci"                # consistent test gradients (efg.vci) or "none"
     stabilisation = "none"            # or "perturbation": the flow-equation term
                                       # -h^2/(4M) int grad(p - p_n) . grad(q) of
@@ -244,8 +248,8 @@ KEYS = {
     "segment": ("from", "to", "ux", "uy", "water", "settlement_rate", "force"),
     "loading": ("velocity_gradient", "load"),
     "time": ("end", "steps", "dt0", "growth", "dt_max", "on_failure"),
-    "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "cells", "order", "penalty",
-            "correction", "stabilisation", "stabilisation_factor"),
+    "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "cells", "order", "essential",
+            "penalty", "correction", "stabilisation", "stabilisation_factor"),
     "fem": ("remesh", "remesh_quality"),
 }
 """The keys each section accepts (``edge``: each ``[boundary.<side>]``, which also takes

@@ -31,6 +31,9 @@ WEIGHT_FORMS = (f"quartic (alias Q), cubic, exp:C with {EXP_C[0]:g} <= C <= {EXP
 DEFAULT_SCALE = 1.3
 CELLS = ("delaunay", "squares")
 """Background integration cells of ``efg.cells``."""
+ESSENTIAL = ("penalty", "nitsche")
+"""Essential conditions of ``efg.essential``: penalty (:mod:`efg.boundary`) or Nitsche's
+method (:mod:`efg.nitsche`)."""
 CORRECTIONS = ("vci", "none")
 """Test-gradient corrections of ``efg.correction``."""
 STABILISATIONS = ("none", "perturbation", "projection")
@@ -148,8 +151,11 @@ class EFGSettings:
     read by :meth:`Weight.parse`); ``scale_u`` and ``scale_p`` are the support scale
     factors (support = scale x distance to the 8th nearest node, dimensionless);
     ``cells`` is ``delaunay`` (rebuilt every step) or ``squares`` (quarter cells along
-    the boundary); ``order`` is the Gauss order of the cells; ``penalty`` is the penalty
-    factor relative to the stiffness scale (P-wave modulus over nodal spacing);
+    the boundary); ``order`` is the Gauss order of the cells; ``essential`` is how
+    essential conditions are imposed, ``penalty`` (:mod:`efg.boundary`) or ``nitsche``
+    (:mod:`efg.nitsche`: consistent, beta from an eigenvalue bound, no factor to
+    choose); ``penalty`` is the penalty factor relative to the stiffness scale (P-wave
+    modulus over nodal spacing; unused with ``nitsche``);
     ``correction`` is ``vci`` (variationally consistent test-function gradients, which
     pass the patch test with any quadrature; :mod:`efg.vci`) or ``none`` (plain Gauss
     quadrature of the MLS gradients, as in the paper); ``stabilisation`` is ``none``,
@@ -172,6 +178,7 @@ class EFGSettings:
     scale_p: float = DEFAULT_SCALE
     cells: str = "delaunay"
     order: int = 2
+    essential: str = "penalty"
     penalty: float = 1e6
     correction: str = "vci"
     stabilisation: str = "none"

@@ -21,8 +21,8 @@ from soil.errors import InputError, require
 from soil.materials import FLUID_KEYS, material_from_spec
 from soil.schema import (ASPECTS, GEOMETRIC, GRADINGS, KEYS, LENGTHS, MAX_TRIANGLE_ORDER,
                          SCALES, SECTIONS, expand_displacement)
-from soil.settings import (CELLS, CORRECTIONS, DEFAULT_SCALE, REMESH, STABILISATIONS,
-                           EFGSettings, FEMSettings, Weight)
+from soil.settings import (CELLS, CORRECTIONS, DEFAULT_SCALE, ESSENTIAL, REMESH,
+                           STABILISATIONS, EFGSettings, FEMSettings, Weight)
 
 _RESTRAINED = ("fixed", "prescribed", "exact")
 _CORNERS = (("left", "bottom"), ("left", "top"), ("right", "bottom"), ("right", "top"))
@@ -506,6 +506,8 @@ def _efg(table):
               "scale_p": _number(table, "scale_p", "efg", defaults.scale_p),
               "cells": _string(table, "cells", "efg", defaults.cells, CELLS),
               "order": order,
+              "essential": _string(table, "essential", "efg", defaults.essential,
+                                   ESSENTIAL),
               "penalty": _number(table, "penalty", "efg", defaults.penalty),
               "correction": _string(table, "correction", "efg", defaults.correction,
                                     CORRECTIONS),

@@ -24,13 +24,85 @@ They are per integration point, quadrature weight included, in the layout both
 assemblies use: fields ``(ux, uy, p)`` and slots ``(value, d/dx, d/dy)`` on x_n.
 ``residual`` gives ``r[m, f, s]``: the residual of a test function N of field f is
 ``sum_m sum_s N_s(x_m) r[m, f, s]``. ``tangent`` gives ``c[m, f, s, g, t]``, its exact
-linearisation in the trial field g, slot t.
+linearisation in the trial field g, slot t, as :class:`Coefficients`: only the terms
+``(f, s, g, t)`` the weak form has (24 to 35 of the 81), never the dense array. Every
+integrand a solver scatters (penalties, elasticity, Gram and mass matrices) takes that
+form.
 """
+
+from dataclasses import dataclass
+from itertools import product
 
 import numpy as np
 import scipy.sparse as sp
 
 from soil.kinematics import IDENTITY, in_plane, spatial_tangent
+
+
+@dataclass(frozen=True)
+class Coefficients:
+    """Integrand coefficients ``c[m, f, s, g, t]`` at M points, stored by the terms in use.
+
+    ``c`` pairs test field f, slot s with trial field g, slot t (slots: 0 value, 1 d/dx,
+    2 d/dy on the integration configuration); a block's matrix entry of test function a
+    and trial function b is ``sum_m sum_(f s g t) N_a,s(x_m) c[m, f, s, g, t]
+    N_b,t(x_m)``. Terms not listed are zero at every point, and no array of all
+    ``3 x 3`` slot pairs per point is made: 8 bytes per point and term.
+
+    Attributes
+    ----------
+    terms : tuple of (int, int, int, int)
+        The distinct terms ``(f, s, g, t)``.
+    values : ndarray, shape (M, T)
+        ``values[m, k] = c[m, *terms[k]]``, quadrature weight included (units: those of
+        the integrand times m2 per unit thickness).
+    fields : (int, int)
+        Number of test and trial fields.
+
+    Examples
+    --------
+    The mass integrand ``w u v`` of one field at two points:
+
+    >>> c = Coefficients.of({(0, 0, 0, 0): np.array([0.5, 0.25])}, (1, 1))
+    >>> c.values.shape, c.pairs, float(c.slots(0, 0)[1, 0, 0])
+    ((2, 1), ((0, 0),), 0.25)
+    """
+
+    terms: tuple
+    values: np.ndarray
+    fields: tuple
+
+    @classmethod
+    def of(cls, terms, fields):
+        """From a dict ``{(f, s, g, t): (M,) array}`` of the terms in use."""
+        return cls(tuple(terms), np.stack([np.asarray(v, dtype=float)
+                                           for v in terms.values()], axis=1), tuple(fields))
+
+    def columns(self):
+        """The terms as a dict ``{(f, s, g, t): (M,) view of values}``."""
+        return dict(zip(self.terms, self.values.T))
+
+    def block(self, test, trial):
+        """The coefficients of the test fields ``test`` and trial fields ``trial`` (ranges
+        of field indices), renumbered from 0; their values are copied (M, T_block)."""
+        keep = [k for k, (f, _, g, _) in enumerate(self.terms) if f in test and g in trial]
+        terms = tuple((f - test.start, s, g - trial.start, t)
+                      for f, s, g, t in (self.terms[k] for k in keep))
+        return Coefficients(terms, self.values[:, keep], (len(test), len(trial)))
+
+    @property
+    def pairs(self):
+        """The field pairs ``(f, g)`` with at least one term, sorted."""
+        return tuple(sorted({(f, g) for f, _, g, _ in self.terms}))
+
+    def slots(self, f, g):
+        """``c[:, f, :, g, :]``: the (M, 3, 3) slot matrix of one field pair (zero where no
+        term): 9 values per point, one pair at a time."""
+        out = np.zeros((len(self.values), 3, 3))
+        for (tf, s, tg, t), column in self.columns().items():
+            if (tf, tg) == (f, g):
+                out[:, s, t] = column
+        return out
 
 
 def total_stress(effective, p, fluid):
@@ -78,7 +150,7 @@ def residual(total, J, Finv, w, p, p_n, grad_p, fluid, dt, beta=0.0, grad_p_n=No
 
 
 def tangent(C, effective, total, J, Finv, w, fluid, dt, beta=0.0, v_n=1.0, grad_p=None):
-    """Tangent coefficients ``c[m, f, s, g, t]``, (M, 3, 3, 3, 3).
+    """Tangent coefficients ``c[m, f, s, g, t]`` as :class:`Coefficients` of 3 x 3 fields.
 
     The momentum block is :func:`soil.kinematics.spatial_tangent` (material tangent C,
     Jaumann rotation of sigma', change of area and orientation) pulled back to x_n
@@ -90,21 +162,35 @@ def tangent(C, effective, total, J, Finv, w, fluid, dt, beta=0.0, v_n=1.0, grad_
     ``effective`` the effective stress (M, 4). The one approximation: the Jaumann
     rotation acts on sigma' at t_(n+1) rather than on the rotated start-of-step stress, a
     difference of the order of the strain increment.
+
+    Terms: the 16 momentum ones ``(f, 1 + i, g, 1 + j)`` of the displacements f, g < 2;
+    the 4 + 4 couplings ``(f, 1 + i, 2, 0)`` and ``(2, 0, f, 1 + i)``; storage ``(2, 0,
+    2, 0)`` when S is not 0; flow ``(2, 1, 2, 1)`` and ``(2, 2, 2, 2)`` when it is not
+    0 anywhere; and the 8 flux terms ``(2, 1 + i, g, 1 + j)`` when k depends on the void
+    ratio. Units (w in m2): kPa m2 (momentum), m2 (coupling), m2/kPa (storage), m4/kPa
+    (flow), m3 (flux).
     """
     wJ = w * J
-    A = spatial_tangent(C, in_plane(effective), in_plane(total))
-    c = np.zeros((len(w), 3, 3, 3, 3))
-    c[:, :2, 1:, :2, 1:] = _pulled_back(wJ[:, None, None, None, None] * A, Finv)
-    c[:, :2, 1:, 2, 0] = -fluid.biot_alpha * wJ[:, None, None] * np.swapaxes(Finv, 1, 2)
-    c[:, 2, 0, :2, 1:] = c[:, :2, 1:, 2, 0]
-    c[:, 2, 0, 2, 0] = -fluid.storage * w
+    Finv_T = np.swapaxes(Finv, 1, 2)                                     # (m, f, k)
+    momentum = _pulled_back(
+        wJ[:, None, None, None, None] * spatial_tangent(C, in_plane(effective),
+                                                       in_plane(total)), Finv)
+    terms = {(f, 1 + i, g, 1 + j): momentum[:, f, i, g, j]
+             for f, i, g, j in product(range(2), repeat=4)}
+    coupling = -fluid.biot_alpha * wJ[:, None, None] * Finv_T
+    for f, i in product(range(2), repeat=2):
+        terms[f, 1 + i, 2, 0] = terms[2, 0, f, 1 + i] = coupling[:, f, i]
+    if fluid.storage:
+        terms[2, 0, 2, 0] = -fluid.storage * w
     mobility, slope = fluid.mobility_at(v_n * J)
-    c[:, 2, 1, 2, 1] = c[:, 2, 2, 2, 2] = -(dt * mobility + beta) * w
+    flow = -(dt * mobility + beta) * w
+    if flow.any():
+        terms[2, 1, 2, 1] = terms[2, 2, 2, 2] = flow
     if slope.any():
-        dflux = (dt * w * slope * v_n * J)[:, None, None, None] * (
-            grad_p[:, :, None, None] * np.swapaxes(Finv, 1, 2)[:, None])
-        c[:, 2, 1:, :2, 1:] = -dflux
-    return c
+        dflux = -dt * w * slope * v_n * J
+        for i, g, j in product(range(2), repeat=3):
+            terms[2, 1 + i, g, 1 + j] = dflux * (grad_p[:, i] * Finv_T[:, g, j])
+    return Coefficients.of(terms, (3, 3))
 
 
 def _pulled_back(A, Finv):

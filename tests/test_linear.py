@@ -8,6 +8,8 @@ import scipy.sparse as sp
 
 import efg.solver
 import fem_reference.solver
+import soil.coupling
+from soil.coupling import TIMERS, new_counts, newton
 from soil.errors import ConvergenceError, InputError
 from soil.linear import backend, factorise
 from soil.problems import load_case
@@ -43,6 +45,73 @@ def test_saddle_point_solve(monkeypatch, name):
         assert np.abs(K @ x - b).max() < 1e-9 * np.abs(b).max()
 
 
+def unsymmetric_saddle(skew, n=40, seed=0):
+    """:func:`saddle` plus ``skew`` times a random skew-symmetric matrix (same pattern)."""
+    K, groups, b = saddle(n, seed)
+    M = K.copy()
+    M.data = np.random.default_rng(seed + 2).uniform(-1.0, 1.0, M.nnz)
+    return (K + skew * (M - M.T)).tocsr(), groups, b
+
+
+@pytest.mark.skipif(not PARDISO, reason="pypardiso is not installed (soilwater[fast])")
+@pytest.mark.parametrize("node_blocked", [False, True])
+def test_symmetric_factorisation_solves_sym_K(monkeypatch, node_blocked):
+    """PARDISO's LDL^T of sym(K) solves the symmetric saddle point (zero pressure block)
+    to 1e-9, and an unsymmetric K through its symmetric part, not through K."""
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "pardiso")
+    for skew in (0.0, 0.5):
+        K, groups, b = unsymmetric_saddle(skew)
+        lu = factorise(K, groups=groups if node_blocked else None, symmetric=True)
+        x = lu.solve(b)
+        S = (K + K.T) / 2
+        assert lu.symmetric
+        assert np.abs(S @ x - b).max() < 1e-9 * np.abs(b).max()
+        if skew:
+            assert np.abs(K @ x - b).max() > 1e-3 * np.abs(b).max()
+
+
+def test_superlu_factorises_K_when_asked_for_sym_K(monkeypatch):
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "superlu")
+    K, _, b = unsymmetric_saddle(0.5)
+    lu = factorise(K, symmetric=True)
+    assert not lu.symmetric
+    assert np.abs(K @ lu.solve(b) - b).max() < 1e-9 * np.abs(b).max()
+
+
+class Linear:
+    """Newton system ``R(x) = K x - b`` (:func:`soil.coupling.newton`)."""
+
+    def __init__(self, K, groups, b):
+        self.K, self.groups, self.b, self.x = K, groups, b, np.zeros(len(b))
+
+    def residual(self):
+        R = self.K @ self.x - self.b
+        return R, np.abs(R).max() / np.abs(self.b).max()
+
+    def tangent(self):
+        return self.K
+
+    def advance(self, dx):
+        self.x = self.x + dx
+
+
+@pytest.mark.parametrize("name", ["superlu", "pardiso"])
+@pytest.mark.parametrize("skew", [0.0, 0.5])
+def test_newton_falls_back_to_K_when_sym_K_stalls(monkeypatch, name, skew):
+    """The first factorisation is of sym(K) (PARDISO); with a strongly unsymmetric K its
+    correction does not contract, and Newton converges on the factorisation of K."""
+    if name == "pardiso" and not PARDISO:
+        pytest.skip("pypardiso is not installed (extra soilwater[fast])")
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", name)
+    monkeypatch.setattr(soil.coupling, "SYMMETRIC_FIRST", True)
+    system = Linear(*unsymmetric_saddle(skew))
+    stats = {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
+    newton(system, stats)
+    symmetric, unsymmetric = {"superlu": (0, 1), "pardiso": (1, int(skew > 0))}[name]
+    assert stats["symmetric_factorisations"] == symmetric
+    assert stats["factorisations"] == symmetric + unsymmetric
+
+
 def test_singular_tangent_is_a_convergence_error(monkeypatch):
     monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "superlu")
     with pytest.raises(ConvergenceError, match="singular"):
@@ -70,12 +139,21 @@ def test_elastic_steps_reuse_one_factorisation(monkeypatch, solve):
 
 
 @pytest.mark.skipif(not PARDISO, reason="pypardiso is not installed (soilwater[fast])")
-def test_pardiso_and_superlu_give_the_same_steps(monkeypatch):
-    """Both back-ends converge to the same Newton tolerance: EFG Cam-clay paths agree."""
+@pytest.mark.parametrize("symmetric_first", [False, True])
+def test_pardiso_and_superlu_give_the_same_steps(monkeypatch, symmetric_first):
+    """Both back-ends converge to the same Newton tolerance: EFG Cam-clay paths agree,
+    PARDISO's first factorisation of a step of sym(K) or not."""
     runs = {}
     for name in ("superlu", "pardiso"):
         monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", name)
-        runs[name] = efg.solver.solve(compression(), progress=False).history
+        monkeypatch.setattr(soil.coupling, "SYMMETRIC_FIRST", symmetric_first)
+        result = efg.solver.solve(compression(), progress=False)
+        runs[name] = result.history
+    symmetric = result.summary["symmetric_factorisations"]
+    if symmetric_first:
+        assert symmetric >= len(result.history)      # one a step, more after a cut-back
+    else:
+        assert symmetric == 0
     for column in ("p", "q", "eps_a"):
         assert np.allclose(runs["pardiso"][column], runs["superlu"][column],
                            rtol=1e-7, atol=1e-9)

@@ -192,6 +192,8 @@ REFUSED = [
     ("terzaghi", ["efg.order=true"], "efg.order = True"),
     ("terzaghi", [f"efg.order={MAX_TRIANGLE_ORDER + 1}"], "efg.order = 20"),
     ("terzaghi", ["efg.penalty=inf"], "efg.penalty = inf"),
+    ("terzaghi", ["efg.essential=lagrange"],
+     "efg.essential = 'lagrange' is unknown: use one of penalty, nitsche"),
     ("terzaghi", ["geometry.width=inf"], "geometry.width = inf"),
     ("terzaghi", ["geometry.width=nan"], "geometry.width = nan"),
     ("terzaghi", ["geometry.width=1e300"], "geometry.width = 1e+300"),
