@@ -8,6 +8,14 @@ tolerance, not by round-off. Measured with ``tests/camclay_speed.py`` (6e5 point
 model, increments up to 2 %): stress 2.5e-11 p'_n, tangent 1.5e-9 of its norm (original,
 near the apex; 3.6e-11 modified), p'c 1.9e-11 relative. The bounds below are about ten
 times these, far above round-off, so they hold on any CPU.
+
+One quantity is ill-conditioned by the physics: the radial-return ratio ``q / q_tr`` in
+the tangent's deviatoric part. The residual fixes q only to ``tol x p'_n``, so the ratio,
+and the tangent with it, is known only to ``tol x p'_n / q_tr``; at a normally
+consolidated isotropic state of the original model (the vertex) a small increment has
+``q_tr`` of 1e-5 p'_n and the two codes' tangents differ by up to 2.6e-8 (found by
+hypothesis). The tangent bound adds ten times that sensitivity, point by point (at
+most 1e-4: a larger difference is a fault, whatever q_tr).
 """
 
 import numpy as np
@@ -20,11 +28,12 @@ from conftest import table1
 from soil import camclay
 from soil.camclay import CamClay
 from soil.errors import ConvergenceError
-from soil.kinematics import hughes_winget, invariants
+from soil.kinematics import DEVIATORIC, deviator, double_dot, hughes_winget, invariants
 
 STRESS_TOL = 2e-10    # of p' at the start of the step
 TANGENT_TOL = 2e-8    # of the tangent's Frobenius norm
 PC_TOL = 2e-10        # relative
+LOCAL_TOL = 1e-11     # the return mapping's residual tolerance (CamClay.update)
 
 CLAYS = {
     "original": table1("original"),
@@ -34,16 +43,26 @@ CLAYS = {
 }
 
 
-def assert_agree(points, kernel, numpy):
+def assert_agree(clay, points, kernel, numpy):
     """The kernel's (stress, state, tangent) within the tolerances of the oracle's."""
     p_n = invariants(hughes_winget(points[0], points[3]))[0]
     stress = np.abs(kernel[0] - numpy[0]).max(axis=1) / p_n
     tangent = (np.linalg.norm(kernel[2] - numpy[2], axis=(1, 2))
                / np.linalg.norm(numpy[2], axis=(1, 2)))
     assert stress.max() < STRESS_TOL
-    assert tangent.max() < TANGENT_TOL
+    sensitivity = 10 * LOCAL_TOL * p_n / np.maximum(_q_trial(clay, points), 1e-300)
+    assert np.all(tangent < TANGENT_TOL + np.minimum(sensitivity, 1e-4))
     np.testing.assert_allclose(kernel[1]["pc"], numpy[1]["pc"], rtol=PC_TOL, atol=0)
     np.testing.assert_allclose(kernel[1]["v"], numpy[1]["v"], rtol=1e-14, atol=0)
+
+
+def _q_trial(clay, points):
+    """The elastic trial deviator stress q_tr of each point (compression positive)."""
+    stress, state, dstrain, dspin = points
+    rotated = hughes_winget(stress, dspin)
+    G = clay.moduli(invariants(rotated)[0], state["v"])[1]
+    s_tr = deviator(rotated) + 2 * G[:, None] * (dstrain @ DEVIATORIC.T)
+    return np.sqrt(1.5 * double_dot(s_tr, s_tr))
 
 
 uniform_rows = st.lists(st.lists(st.floats(0.0, 1.0), min_size=oracle.UNIFORMS,
@@ -57,7 +76,7 @@ def test_kernel_matches_the_numpy_oracle(name, rows):
     """Random admissible states and increments up to 2 % (one to four points a call)."""
     clay = CLAYS[name]
     points = oracle.admissible_points(clay, np.array(rows))
-    assert_agree(points, clay.update(*points), oracle.update(clay, *points))
+    assert_agree(clay, points, clay.update(*points), oracle.update(clay, *points))
 
 
 @pytest.mark.parametrize("model", ["original", "modified"])
@@ -69,7 +88,7 @@ def test_kernel_matches_the_oracle_on_every_kind_of_return(model):
     points = oracle.admissible_points(clay, np.random.default_rng(5).random(
         (20000, oracle.UNIFORMS)))
     kernel, numpy = clay.update(*points), oracle.update(clay, *points)
-    assert_agree(points, kernel, numpy)
+    assert_agree(clay, points, kernel, numpy)
     pc_n, pc = points[1]["pc"], kernel[1]["pc"]
     dev = points[2][:, :3].sum(axis=1)
     assert min(np.sum(pc == pc_n), np.sum(pc > pc_n), np.sum(pc < pc_n)) > 2000
