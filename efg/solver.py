@@ -56,6 +56,7 @@ from efg.mls import ShapeFunctions
 from soil import weakform
 from soil.bifurcation import h1_gram, restricted_eigenvalue
 from soil.coupling import Scales, history_row, material_update, newton, run, timed
+from soil.linear import Layout
 from soil.geostatic import buoyant_weight, initial_state, total_stress
 from soil.results import Snapshot, permeability
 from soil.kinematics import cauchy_traction, invariants
@@ -212,8 +213,7 @@ class _System:
         self.c_mean = disc.tp.phi.T @ disc.w
         self.du, self.p, self.plate, self.lam = (np.zeros(2 * self.n), points.p.copy(),
                                                  points.plate, 0.0)
-        extra = int(bc.rigid.any()) + int(model.scales.pin_pressure)
-        self.groups = np.concatenate([np.tile(np.arange(self.n), 3), np.full(extra, -1)])
+        self.layout = _layout(points.nodes, self.c_mean, model.scales, bc.rigid.any())
 
     def residual(self):
         """``[R_u, R_p, plate?, pin?]`` at the iterate and its scaled size beyond
@@ -501,6 +501,20 @@ def _uniqueness(model, disc, K, n):
     K = sp.csr_matrix(K)
     value = restricted_eigenvalue(K[:2 * n, :2 * n], K[2 * n:3 * n, :2 * n], G)
     return value / model.scales.modulus
+
+
+def _layout(nodes, mass, scales, rigid):
+    """The :class:`soil.linear.Layout` of the unknowns ``[ux, uy, p, plate?, pin?]``."""
+    n = len(nodes)
+    plate, pin = [scales.force] * int(rigid), [scales.volume] * int(scales.pin_pressure)
+    extra = len(plate) + len(pin)
+    return Layout(groups=np.concatenate([np.tile(np.arange(n), 3), np.full(extra, -1)]),
+                  fields=np.concatenate([np.repeat([0, 1, 2], n), np.full(extra, -1)]),
+                  locations=np.concatenate([nodes, nodes, nodes, np.zeros((extra, 2))]),
+                  scales=np.concatenate([np.full(2 * n, scales.force),
+                                         np.full(n, scales.volume), plate, pin]),
+                  mass=np.concatenate([np.zeros(2 * n), mass, np.zeros(extra)]),
+                  modulus=scales.modulus)
 
 
 def _roundoff(disc, points, du, du_bar, p, plate, alpha_u, alpha_p, rigid_w):

@@ -82,6 +82,7 @@ from soil.coupling import Scales, history_row, material_update, newton, run, tim
 from soil.errors import ConvergenceError, InputError
 from soil.geostatic import buoyant_weight, initial_state, total_stress
 from soil.kinematics import cauchy_traction, invariants, prescribed_increment
+from soil.linear import Layout
 from soil.quality import cell_quality
 from soil.results import Snapshot, permeability
 from soil.triangulation import close_boundary, conforms, delaunay_triangles
@@ -456,7 +457,7 @@ class _System:
         self.x, self.lam = x, 0.0
         self.c_mean = np.zeros(len(x))
         self.c_mean[2 * n_u:] = disc.p.vector(disc.dx[..., None, None] * [1.0, 0, 0])
-        self.groups = None
+        self.layout = _layout(con.T, n_u, disc.doflocs.T, self.c_mean, model.scales)
 
     def residual(self):
         """The reduced residual (plus the pin) and its scaled size."""
@@ -512,6 +513,27 @@ class _System:
                        weights=self.disc.dx.ravel() * self.J,
                        stretching=self.deps / self.dt, velocity=x[:2 * n_u] / self.dt,
                        uniqueness=uniqueness, reactions=reactions)
+
+
+def _layout(T, n_u, u_locations, mass, scales):
+    """The :class:`soil.linear.Layout` of the reduced unknowns (``T``'s columns, the
+    mean-pressure multiplier last when pinned): a column of one full DOF has its field,
+    the plate's column (many) none."""
+    n = T.shape[0]
+    fields = np.concatenate([np.zeros(n_u, int), np.ones(n_u, int),
+                             np.full(n - 2 * n_u, 2)])
+    columns = sp.csc_matrix(T)
+    single = np.diff(columns.indptr) == 1
+    first = columns.indices[np.minimum(columns.indptr[:-1], len(columns.indices) - 1)]
+    reduced = np.where(single, fields[first], -1)
+    locations = np.concatenate([u_locations, u_locations, np.zeros((n - 2 * n_u, 2))])
+    scale = np.where(reduced == 2, scales.volume, scales.force)
+    pin = int(scales.pin_pressure)
+    return Layout(fields=np.append(reduced, [-1] * pin),
+                  locations=np.concatenate([locations[first], np.zeros((pin, 2))]),
+                  scales=np.append(scale, [scales.volume] * pin),
+                  mass=np.append(np.where(reduced == 2, T.T @ mass, 0.0), [0.0] * pin),
+                  modulus=scales.modulus)
 
 
 def _residual(model, disc, current, x, stress, J, Finv, dt):

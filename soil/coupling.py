@@ -25,7 +25,7 @@ from tqdm import tqdm
 from soil.errors import ConvergenceError
 from soil.geostatic import buoyant_weight, initial_state
 from soil.kinematics import invariants, strain_increment
-from soil.linear import factorise, identity, must_refactorise
+from soil.linear import FORCING_MAX, factorise, forcing, identity, must_refactorise
 from soil.quality import cell_quality
 from soil.results import Result
 
@@ -164,8 +164,8 @@ def run(case, method, options, current, step, row, snapshot, summary, progress=T
     Result
         Its summary holds ``steps``, ``tolerance``, ``linear_solver``, ``summary``, the
         statistics of :func:`march`, the counts of :func:`newton`
-        (``factorisations``, ``symmetric_factorisations``, ``perturbed_pivots``) and
-        ``timings``.
+        (``factorisations``, ``symmetric_factorisations``, ``perturbed_pivots``,
+        ``factor_flops``, ``linear_iterations``) and ``timings``.
     """
     stats = {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
     tic = time.perf_counter()
@@ -179,7 +179,8 @@ def run(case, method, options, current, step, row, snapshot, summary, progress=T
 
 def new_counts():
     """The factorisation counts :func:`newton` adds to, at zero."""
-    return {"factorisations": 0, "symmetric_factorisations": 0, "perturbed_pivots": 0}
+    return {"factorisations": 0, "symmetric_factorisations": 0, "perturbed_pivots": 0,
+            "factor_flops": 0.0, "linear_iterations": 0}
 
 
 def newton(system, stats):
@@ -195,6 +196,11 @@ def newton(system, stats):
     ``sym(K)^-1 (K - K^T) / 2``, those of ``K`` by the change of the tangent over the
     step. SuperLU has no symmetric mode: every factorisation is of ``K``.
 
+    With the Krylov back-end a "factorisation" is a preconditioner, kept by the same rule,
+    and each correction is solved inexactly, to the relative residual of
+    :func:`soil.linear.forcing` (Eisenstat-Walker): loosely far from the solution,
+    tightly near it.
+
     Parameters
     ----------
     system : object
@@ -203,13 +209,14 @@ def newton(system, stats):
         * ``residual() -> (R, scaled)``: the residual vector at the current iterate and
           its size in units of the tolerance's scales (:class:`Scales`);
         * ``tangent() -> K``: the sparse Jacobian of ``R`` at the current iterate;
-        * ``groups``: the node of each unknown for :func:`soil.linear.factorise` (or
-          None);
+        * ``layout``: what the unknowns are, a :class:`soil.linear.Layout` (or None);
         * ``advance(dx)``: add a correction to the unknowns.
     stats : dict
         Added to: ``factorisations`` (all of them), ``symmetric_factorisations`` (those of
         ``sym(K)``), ``perturbed_pivots`` (summed over the factorisations; PARDISO's
-        ``iparm(14)``) and ``timings`` (``assembly_s``, ``solve_s``).
+        ``iparm(14)``), ``factor_flops`` (PARDISO's ``iparm(19)``, summed),
+        ``linear_iterations`` (Krylov iterations) and ``timings`` (``assembly_s``,
+        ``solve_s``).
 
     Returns
     -------
@@ -232,7 +239,7 @@ def newton(system, stats):
 
     >>> import scipy.sparse as sp
     >>> class Root:
-    ...     groups, x = None, np.array([1.0])
+    ...     layout, x = None, np.array([1.0])
     ...     def residual(self):
     ...         return self.x**2 - 2, abs(self.x[0]**2 - 2)
     ...     def tangent(self):
@@ -244,7 +251,7 @@ def newton(system, stats):
     >>> round(float(root.x[0]), 8), stats["factorisations"], bool(residual < TOLERANCE)
     (1.41421356, 2, True)
     """
-    lu, previous = None, np.inf
+    lu, previous, eta = None, np.inf, FORCING_MAX
     for iteration in range(1, MAX_ITERATIONS + 1):
         R, residual = system.residual()
         if not np.isfinite(residual):
@@ -258,12 +265,13 @@ def newton(system, stats):
             with timed(stats["timings"], "assembly_s"):
                 K = system.tangent()
             with timed(stats["timings"], "solve_s"):
-                lu = factorise(K, groups=system.groups,
-                               symmetric=SYMMETRIC_FIRST and lu is None)
+                lu = factorise(K, system.layout, symmetric=SYMMETRIC_FIRST and lu is None)
             _count(stats, lu)
-        previous = residual
+        eta = forcing(residual, previous, eta)
+        previous, before = residual, lu.iterations
         with timed(stats["timings"], "solve_s"):
-            dx = lu.solve(-R)
+            dx = lu.solve(-R, rtol=eta)
+        stats["linear_iterations"] += lu.iterations - before
         system.advance(dx)
 
 
@@ -272,6 +280,7 @@ def _count(stats, lu):
     stats["factorisations"] += 1
     stats["symmetric_factorisations"] += lu.symmetric
     stats["perturbed_pivots"] += lu.perturbed_pivots
+    stats["factor_flops"] += lu.flops
 
 
 def material_update(material, stress, state, H, timings, where="an integration point"):
@@ -327,7 +336,8 @@ def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, 
     t, dt : float
         The level's time and step [s].
     info : dict
-        ``iterations``, ``substeps`` and ``residual`` of the level (:func:`march`).
+        ``iterations``, ``substeps``, ``residual`` and ``linear_iterations`` of the level
+        (:func:`march`); the Krylov iterations become a column where there were any.
     stress, stretching : ndarray, shape (P, 4)
         Effective stress (tension positive) and last stretching [1/s] at the material
         points.
@@ -381,6 +391,8 @@ def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, 
             "settlement": -float(np.mean(top[:, 1] - top0[:, 1])),
             "dt": dt, "iterations": info["iterations"], "substeps": info["substeps"],
             "residual": info["residual"], **{f"p_w@{name}": v for name, v in probes},
+            **({"linear_iterations": info["linear_iterations"]}
+               if info.get("linear_iterations") else {}),
             **({} if uniqueness is None else {"uniqueness": uniqueness}), **contact,
             **quality}
 
@@ -482,6 +494,7 @@ def _advance(current, step, t0, t1, stats):
     for cut in range(MAX_CUTS + 1):
         try:
             t, trial, iterations, residuals = t0, current, 0, []
+            krylov = stats.get("linear_iterations", 0)
             for _ in range(2**cut):
                 with np.errstate(all="ignore"):  # failures end in ConvergenceError
                     trial, its, res = step(trial, t, t + dt / 2**cut)
@@ -492,7 +505,8 @@ def _advance(current, step, t0, t1, stats):
             stats["newton_iterations"] += iterations
             stats["max_residual"] = max(stats["max_residual"], *residuals)
             return trial, {"iterations": iterations, "residual": max(residuals),
-                           "substeps": 2**cut}
+                           "substeps": 2**cut,
+                           "linear_iterations": stats.get("linear_iterations", 0) - krylov}
         except (ConvergenceError, FloatingPointError) as err:
             reason = err
     raise ConvergenceError(f"step t = {t0:g} -> {t1:g} s failed after {MAX_CUTS} halvings "

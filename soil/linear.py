@@ -9,12 +9,18 @@ Two back-ends, one interface (:func:`factorise` returns an object with ``solve(b
   single-threaded. Its fill grows fast with the 20 to 30 neighbours of an MLS node, so it
   is slow on large EFG tangents (``make bench`` measures both).
 
+- ``"krylov"``: no factorisation; flexible GMRES with a block preconditioner (AMG on the
+  displacements, a fixed-stress Schur complement on the pore pressures; :mod:`soil.krylov`,
+  needs pyamg). Each solve stops at the relative residual :func:`forcing` asks for
+  (inexact Newton). Its memory grows as N, a factor's faster; it is chosen only when asked
+  for (``make bench`` does from :data:`comparisons.bench.KRYLOV_FROM` nodes).
+
 ``pardiso`` is used when ``pypardiso`` imports, unless the environment variable
-``SOILWATER_LINEAR_SOLVER=superlu`` asks otherwise. Both solvers reuse a factorisation
+``SOILWATER_LINEAR_SOLVER`` (``superlu``, ``pardiso`` or ``krylov``) asks otherwise. Both solvers reuse a factorisation
 while it contracts the Newton residual at least :data:`CONTRACTION`-fold per iteration
 (modified Newton), and refactorise the current tangent otherwise.
 
-``factorise(K, groups, symmetric=True)`` asks for the cheaper symmetric factorisation of
+``factorise(K, layout, symmetric=True)`` asks for the cheaper symmetric factorisation of
 ``sym(K) = (K + K^T) / 2``, for a tangent that is nearly symmetric: PARDISO factorises
 its upper triangle as symmetric indefinite (``mtype = -2``, LDL^T with Bunch-Kaufman 1x1
 and 2x2 pivots), half the factor entries of the LU of ``K``. Its solve is the solve of
@@ -34,9 +40,16 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from soil.errors import ConvergenceError, InputError
+from soil.krylov import Krylov, Layout
+
+__all__ = ["Layout", "available", "backend", "factorise", "forcing", "identity",
+           "linear_solver", "must_refactorise"]
 
 #: A factorisation is kept while each iteration divides the residual by at least 1/this.
 CONTRACTION = 0.1
+#: Largest relative residual an inexact-Newton Krylov solve may stop at: a tenth of
+#: :data:`CONTRACTION`, so a kept preconditioner is judged by the tangent, not the solve.
+FORCING_MAX = 0.01
 #: PARDISO ``iparm`` (MKL's 1-based numbering) of the node-blocked factorisation: own
 #: settings (1), METIS ordering (2), the user's permutation (5), one step of iterative
 #: refinement (8), pivots perturbed by 1e-13 (10), no scaling (11) and no weighted
@@ -60,9 +73,14 @@ NODE_ORDERING = {1: 1, 2: 2, 5: 2, 13: 0}
 
 
 def available(name):
-    """True if the back-end ``name`` (``"pardiso"`` or ``"superlu"``) can be used here."""
+    """True if the back-end ``name`` (``"pardiso"``, ``"superlu"``, ``"krylov"``) can be
+    used here."""
     if name == "superlu":
         return True
+    if name == "krylov":
+        from soil.krylov import available as amg
+
+        return amg()
     try:
         import pypardiso  # noqa: F401
     except ImportError:
@@ -71,14 +89,17 @@ def available(name):
 
 
 def backend():
-    """Name of the back-end in use: ``"pardiso"`` or ``"superlu"``."""
+    """Name of the back-end in use: ``"pardiso"``, ``"superlu"`` or ``"krylov"``."""
     choice = os.environ.get("SOILWATER_LINEAR_SOLVER", "").lower()
-    if choice not in ("", "pardiso", "superlu"):
+    if choice not in ("", "pardiso", "superlu", "krylov"):
         raise InputError(f"SOILWATER_LINEAR_SOLVER={choice!r} is not a solver; use "
-                         "'pardiso' or 'superlu'")
+                         "'pardiso', 'superlu' or 'krylov'")
     if choice == "pardiso" and not available("pardiso"):
         raise InputError("SOILWATER_LINEAR_SOLVER=pardiso needs pypardiso: "
                          "pip install 'soilwater[fast]' (x86_64 only)")
+    if choice == "krylov" and not available("krylov"):
+        raise InputError("SOILWATER_LINEAR_SOLVER=krylov needs pyamg: "
+                         "pip install pyamg")
     if choice:
         return choice
     return "pardiso" if available("pardiso") else "superlu"
@@ -92,6 +113,8 @@ def identity():
         import scipy
 
         return f"superlu scipy {scipy.__version__}"
+    if backend() == "krylov":
+        return f"krylov pyamg {_version('pyamg')}"
     return "pardiso " + " ".join(f"{name} {_version(name)}" for name in ("pypardiso", "mkl"))
 
 
@@ -104,7 +127,7 @@ def _version(distribution):
 
 @contextmanager
 def linear_solver(name):
-    """Use the back-end ``name`` (``"pardiso"``, ``"superlu"``; None: leave the choice to
+    """Use the back-end ``name`` (``"pardiso"``, ``"superlu"``, ``"krylov"``; None: leave the choice to
     :func:`backend`) inside the ``with`` block, through ``SOILWATER_LINEAR_SOLVER``."""
     if name is None:
         yield
@@ -126,22 +149,52 @@ def must_refactorise(lu, residual, previous):
     return lu is None or residual > CONTRACTION * previous
 
 
-def factorise(K, groups=None, symmetric=False):
+def forcing(residual, previous, last):
+    """The relative residual an inexact-Newton solve stops at (Eisenstat and Walker 1996,
+    choice 2 with their safeguard): ``0.9 (r_k / r_k-1)^2``, at least ``0.9 eta_k-1^2``
+    when that exceeds 0.1, at most :data:`FORCING_MAX`, and no less than what takes the
+    scaled residual to a tenth of the Newton tolerance.
+
+    Parameters
+    ----------
+    residual, previous : float
+        The scaled Newton residual now and at the last iteration (``inf`` at the first).
+    last : float
+        The forcing of the last iteration (``FORCING_MAX`` at the first).
+
+    Examples
+    --------
+    >>> forcing(1.0, float("inf"), FORCING_MAX)
+    0.01
+    >>> round(forcing(1e-2, 1.0, 0.01), 12)
+    9e-05
+    """
+    from soil.coupling import TOLERANCE
+
+    eta = 0.9 * (residual / previous) ** 2 if np.isfinite(previous) else last
+    if 0.9 * last**2 > 0.1:
+        eta = max(eta, 0.9 * last**2)
+    return float(min(max(eta, 0.1 * TOLERANCE / residual), FORCING_MAX))
+
+
+def factorise(K, layout=None, symmetric=False):
     """Factorise the square sparse matrix ``K`` (or its symmetric part) with the back-end
-    of :func:`backend`.
+    of :func:`backend` (``krylov``: build its preconditioner).
 
     Parameters
     ----------
     K : scipy.sparse matrix, shape (n, n)
         The tangent, unknowns numbered displacements before pore pressures.
-    groups : ndarray of int, shape (n,), optional
-        The node (or location) each unknown belongs to. PARDISO then orders the nodes by
+    layout : Layout, optional
+        What the unknowns are. With ``layout.groups``, the node (or location) each
+        unknown belongs to, PARDISO orders the nodes by
         nested dissection and keeps a node's unknowns together in their index order, so
         its pore pressure is eliminated after its own displacements: the zero pressure
         block of an undrained body needs no pivoting, and the costly weighted matching is
         skipped (one step of iterative refinement instead: the modified Newton iteration
         refines the solution anyway). Unknowns of group -1 (a rigid
-        plate, a Lagrange multiplier) are ordered last. SuperLU ignores ``groups``.
+        plate, a Lagrange multiplier) are ordered last. SuperLU ignores ``groups``. The
+        Krylov back-end needs every attribute of :class:`Layout`.
     symmetric : bool
         Factorise ``sym(K) = (K + K^T) / 2`` as symmetric indefinite (PARDISO,
         :data:`SYMMETRIC_NODE_BLOCKED` or :data:`SYMMETRIC`): ``solve`` then solves with
@@ -150,9 +203,12 @@ def factorise(K, groups=None, symmetric=False):
     Returns
     -------
     object
-        ``solve(b)``; ``symmetric``: whether it is the factorisation of ``sym(K)``;
-        ``perturbed_pivots``: pivots PARDISO perturbed (``iparm(14)``; 0 for SuperLU,
-        which does not perturb).
+        ``solve(b, rtol)`` (``rtol``, the relative residual of an iterative solve, is
+        ignored by the direct ones); ``symmetric``: whether it is the factorisation of
+        ``sym(K)``; ``perturbed_pivots``: pivots PARDISO perturbed (``iparm(14)``; 0 for
+        SuperLU, which does not perturb); ``flops``: floating-point operations of the
+        factorisation as PARDISO reports them (``iparm(19)``; 0 for the others);
+        ``iterations``: Krylov iterations of its solves (0 for the direct ones).
 
     Raises
     ------
@@ -163,11 +219,14 @@ def factorise(K, groups=None, symmetric=False):
     --------
     >>> import numpy as np, scipy.sparse as sp
     >>> K = sp.csr_matrix([[4.0, 1.0, 1.0], [1.0, 3.0, 1.0], [1.0, 1.0, 0.0]])
-    >>> lu = factorise(K, groups=np.array([0, 1, -1]))
+    >>> lu = factorise(K, Layout(groups=np.array([0, 1, -1])))
     >>> bool(np.allclose(K @ lu.solve(np.array([1.0, 2.0, 3.0])), [1.0, 2.0, 3.0]))
     True
     """
-    if backend() == "pardiso":
+    name, groups = backend(), None if layout is None else layout.groups
+    if name == "krylov":
+        return Krylov(K, layout)
+    if name == "pardiso":
         return _Pardiso(K, groups, symmetric)
     return _SuperLU(K)
 
@@ -175,7 +234,7 @@ def factorise(K, groups=None, symmetric=False):
 class _SuperLU:
     """SuperLU's LU factorisation of ``K`` (it has no symmetric mode)."""
 
-    symmetric, perturbed_pivots = False, 0
+    symmetric, perturbed_pivots, flops, iterations = False, 0, 0.0, 0
 
     def __init__(self, K):
         try:
@@ -183,13 +242,15 @@ class _SuperLU:
         except RuntimeError as err:
             raise ConvergenceError(f"the tangent is singular ({err})") from None
 
-    def solve(self, b):
+    def solve(self, b, rtol=None):
         return self.lu.solve(b)
 
 
 class _Pardiso:
     """A PARDISO factorisation of one matrix (of ``K``, or of ``sym(K)`` when
     ``symmetric``); its MKL memory is freed with the object."""
+
+    iterations = 0
 
     def __init__(self, K, groups=None, symmetric=False):
         import pypardiso
@@ -200,6 +261,7 @@ class _Pardiso:
         self.solver = _solver(mtype=-2 if symmetric else 11)
         for index, value in _settings(groups is not None, symmetric).items():
             self.solver.set_iparm(index, value)
+        self.solver.set_iparm(19, -1)            # report the factorisation's Mflops
         if groups is not None:
             self.solver.perm = _grouped_order(self.A, np.asarray(groups, np.int64)) + 1
         if not np.diff(self.A.indptr).all():
@@ -209,12 +271,13 @@ class _Pardiso:
         except pypardiso.pardiso_wrapper.PyPardisoError as err:
             raise ConvergenceError(f"the tangent is singular ({err})") from None
         self.perturbed_pivots = int(self.solver.get_iparm(14))
+        self.flops = 1e6 * float(self.solver.get_iparm(19))
         # phase -1: all of MKL's memory for this solver; the default (phase 0) frees
         # only the factor and leaks the analysis of every factorisation (14 MB a step
         # on a 21 x 21 footing, 14 GB over a 41 x 41 run)
         weakref.finalize(self, self.solver.free_memory, everything=True)
 
-    def solve(self, b):
+    def solve(self, b, rtol=None):
         return self._phase(33, np.asarray(b, dtype=float))
 
     def _phase(self, phase, b):

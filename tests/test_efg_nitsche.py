@@ -98,7 +98,7 @@ def test_nitsche_tangent_is_the_derivative_of_the_residual(name, overrides):
     the largest entry per block (measured below 2e-10); u and p_w shapes shared or not,
     Cam-clay inside its yield surface with an initial stress."""
     system, points = _system(name, overrides)
-    n, extra = system.n, len(system.groups) - 3 * system.n
+    n, extra = system.n, len(system.layout.fields) - 3 * system.n
     rng = np.random.default_rng(0)
     scale = system.model.scales
     x0 = np.concatenate([np.zeros(2 * n), scale.stress * rng.uniform(0.5, 1.5, n),

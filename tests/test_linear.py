@@ -11,7 +11,7 @@ import fem_reference.solver
 import soil.coupling
 from soil.coupling import TIMERS, new_counts, newton
 from soil.errors import ConvergenceError, InputError
-from soil.linear import backend, factorise
+from soil.linear import Layout, backend, factorise
 from soil.problems import load_case
 
 PARDISO = importlib.util.find_spec("pypardiso") is not None
@@ -41,7 +41,7 @@ def test_saddle_point_solve(monkeypatch, name):
     monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", name)
     K, groups, b = saddle()
     for g in (None, groups):
-        x = factorise(K, groups=g).solve(b)
+        x = factorise(K, Layout(groups=g)).solve(b)
         assert np.abs(K @ x - b).max() < 1e-9 * np.abs(b).max()
 
 
@@ -61,7 +61,7 @@ def test_symmetric_factorisation_solves_sym_K(monkeypatch, node_blocked):
     monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "pardiso")
     for skew in (0.0, 0.5):
         K, groups, b = unsymmetric_saddle(skew)
-        lu = factorise(K, groups=groups if node_blocked else None, symmetric=True)
+        lu = factorise(K, Layout(groups=groups if node_blocked else None), symmetric=True)
         x = lu.solve(b)
         S = (K + K.T) / 2
         assert lu.symmetric
@@ -82,7 +82,7 @@ class Linear:
     """Newton system ``R(x) = K x - b`` (:func:`soil.coupling.newton`)."""
 
     def __init__(self, K, groups, b):
-        self.K, self.groups, self.b, self.x = K, groups, b, np.zeros(len(b))
+        self.K, self.layout, self.b, self.x = K, Layout(groups=groups), b, np.zeros(len(b))
 
     def residual(self):
         R = self.K @ self.x - self.b

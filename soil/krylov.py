@@ -1,0 +1,231 @@
+"""The iterative back-end of :mod:`soil.linear`: block-preconditioned FGMRES.
+
+``SOILWATER_LINEAR_SOLVER=krylov`` replaces the factorisation of a Newton tangent
+
+.. math::
+
+    K = \\begin{bmatrix} A & B \\\\ C & D \\end{bmatrix}
+    \\quad (A: \\text{displacements}, D: \\text{pore pressures})
+
+by a preconditioner, and each solve by flexible GMRES (``pyamg.krylov.fgmres``, right
+preconditioned, so the residual it stops on is the true one). The preconditioner is block
+upper triangular,
+
+.. math::
+
+    P^{-1} r: \\quad y_p = \\hat S^{-1} r_p, \\qquad y_u = \\hat A^{-1} (r_u - B y_p),
+
+with one V-cycle of smoothed-aggregation AMG for :math:`\\hat A^{-1}` (pyamg, rigid-body
+near-null modes from the unknowns' locations; 2 x 2 node blocks when every node carries
+both displacements) and one V-cycle of AMG on the fixed-stress Schur complement
+
+.. math::
+
+    \\hat S = D - s \\, \\mathrm{diag}(m_p) / M,
+
+``m_p`` the lumped pressure mass (``int N_i dV``), ``M`` the P-wave modulus of the initial
+state and ``s`` the sign of :math:`C A^{-1} B` (read from its diagonal
+:math:`\\sum_j C_{ij} B_{ji} / A_{jj}`). It needs no permeability: at ``k = 0`` the
+stabilisation of a stabilised pair is what ``D`` holds, and a mass term keeps
+:math:`\\hat S` definite where ``D`` vanishes. Unknowns of neither field (a rigid plate's
+settlement, the mean-pressure multiplier) are eliminated exactly through the
+preconditioner (a dense Schur complement of their few rows).
+
+Rows are scaled by the residual scales of :class:`soil.coupling.Scales` (force or volume per
+unit thickness), so the relative residual FGMRES stops on weighs equilibrium and continuity
+as the Newton tolerance does.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from soil.errors import ConvergenceError, InputError
+
+#: FGMRES restart length (Krylov vectors kept).
+RESTART = 60
+#: FGMRES iterations of one solve. A solve that has not reached its tolerance by then
+#: still returns its correction if it at least halved the residual (Newton judges it);
+#: otherwise it fails.
+MAX_ITERATIONS = 600
+#: Relative residual above which an unfinished solve fails.
+NO_PROGRESS = 0.5
+#: Smallest coarse grid of the AMG hierarchies (solved by a pseudo-inverse).
+MAX_COARSE = 500
+
+
+@dataclass(frozen=True)
+class Layout:
+    """What the unknowns of a Newton system are, for the linear solvers.
+
+    Attributes
+    ----------
+    groups : ndarray of int, shape (n,), or None
+        The node (location) of each unknown, -1 for a rigid plate or a multiplier:
+        PARDISO's node-blocked order (:func:`soil.linear.factorise`).
+    fields : ndarray of int, shape (n,), or None
+        0 and 1: displacement x and y [m]; 2: pore pressure [kPa]; -1: anything else.
+    locations : ndarray, shape (n, 2), or None
+        Where each unknown lives [m]: the rigid-body modes of the displacement AMG.
+    scales : ndarray, shape (n,), or None
+        The residual scale of each row: force or volume per unit thickness.
+    mass : ndarray, shape (n,), or None
+        Lumped pressure mass ``int N_i dV`` [m2 per unit thickness] on pressure rows.
+    modulus : float
+        P-wave modulus ``K + 4G/3`` of the initial state [kPa].
+    """
+
+    groups: np.ndarray = None
+    fields: np.ndarray = None
+    locations: np.ndarray = None
+    scales: np.ndarray = None
+    mass: np.ndarray = None
+    modulus: float = 1.0
+
+    @property
+    def complete(self):
+        """True if the layout names enough for the Krylov back-end."""
+        return all(v is not None for v in (self.fields, self.locations, self.scales,
+                                           self.mass))
+
+
+def available():
+    """True if pyamg imports."""
+    try:
+        import pyamg  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+class Krylov:
+    """The preconditioner of one tangent, and FGMRES solves with it.
+
+    Parameters
+    ----------
+    K : scipy.sparse matrix, shape (n, n)
+    layout : Layout
+
+    Attributes
+    ----------
+    iterations : int
+        FGMRES iterations of all solves so far.
+    symmetric, perturbed_pivots, flops
+        False, 0 and 0.0: the counts :func:`soil.coupling.newton` keeps of a factorisation.
+    """
+
+    symmetric, perturbed_pivots, flops = False, 0, 0.0
+
+    def __init__(self, K, layout):
+        if layout is None or not layout.complete:
+            raise InputError("SOILWATER_LINEAR_SOLVER=krylov needs a solver that describes "
+                             "its unknowns (fields, locations, scales, pressure mass); use "
+                             "pardiso or superlu here")
+        fields, blocked = layout.fields, _node_blocked(layout)
+        u = blocked[np.isin(fields[blocked], (0, 1))]
+        p, other = np.flatnonzero(fields == 2), np.flatnonzero(fields < 0)
+        self.order, self.sizes = np.concatenate([u, p, other]), (len(u), len(p))
+        self.row = 1.0 / layout.scales[self.order]
+        self.K = sp.csr_matrix(sp.diags(self.row) @ sp.csr_matrix(K)[self.order][:, self.order])
+        nu, nm = len(u), len(u) + len(p)
+        A, B = self.K[:nu, :nu], self.K[:nu, nu:nm]
+        C, D = self.K[nu:nm, :nu], self.K[nu:nm, nu:nm]
+        self.B, self.iterations = B, 0
+        self.amg_u = _amg_u(A, layout.locations[u], fields[u], _pairs(layout, u))
+        self.amg_p, self.sign_p = _amg_schur(
+            A, B, C, D, self.row[nu:nm] * layout.mass[p] / layout.modulus)
+        self.F = self.K[nm:, :nm]
+        if len(other):
+            self.Z = np.column_stack([self._main(e) for e in self.K[:nm, nm:].toarray().T])
+            self.schur = np.linalg.inv(self.K[nm:, nm:].toarray() - self.F @ self.Z)
+
+    def _main(self, r):
+        """The block-triangular preconditioner on displacement and pressure rows."""
+        nu = self.sizes[0]
+        y_p = self.amg_p(self.sign_p * r[nu:])
+        return np.concatenate([self.amg_u(r[:nu] - self.B @ y_p), y_p])
+
+    def _apply(self, r):
+        """The preconditioner: :meth:`_main`, the other unknowns eliminated exactly."""
+        nm = sum(self.sizes)
+        y = self._main(r[:nm])
+        if nm == len(r):
+            return y
+        y_o = self.schur @ (r[nm:] - self.F @ y)
+        return np.concatenate([y - self.Z @ y_o, y_o])
+
+    def solve(self, b, rtol=1e-10):
+        """FGMRES on ``K x = b`` to the relative residual ``rtol`` of the scaled rows.
+
+        Raises
+        ------
+        ConvergenceError
+            Relative residual above :data:`NO_PROGRESS` after :data:`MAX_ITERATIONS`
+            iterations (a near-singular tangent: a limit point, a mechanism).
+        """
+        from pyamg.krylov import fgmres
+
+        residuals = []
+        x, _ = fgmres(self.K, self.row * np.asarray(b, float)[self.order],
+                      M=spla.LinearOperator(self.K.shape, self._apply), tol=rtol,
+                      restart=RESTART, maxiter=-(-MAX_ITERATIONS // RESTART),
+                      residuals=residuals)
+        self.iterations += len(residuals) - 1
+        if residuals[0] and residuals[-1] > max(1.01 * rtol, NO_PROGRESS) * residuals[0]:
+            raise ConvergenceError(f"FGMRES relative residual {residuals[-1] / residuals[0]:.1e}"
+                                   f" after {len(residuals) - 1} iterations (wanted "
+                                   f"{rtol:.1e})")
+        out = np.empty_like(x)
+        out[self.order] = x
+        return out
+
+
+def _node_blocked(layout):
+    """All unknowns, sorted by group (node) then field, when groups are known."""
+    n = len(layout.fields)
+    if layout.groups is None:
+        return np.arange(n)
+    return np.lexsort((layout.fields, layout.groups))
+
+
+def _pairs(layout, u):
+    """True if the displacement unknowns ``u`` come as (x, y) pairs of one node each."""
+    if layout.groups is None or len(u) % 2:
+        return False
+    g, f = layout.groups[u], layout.fields[u]
+    return bool(np.all(g[0::2] == g[1::2]) and np.all(f[0::2] == 0) and np.all(f[1::2] == 1))
+
+
+def _rigid_modes(locations, fields):
+    """The 2-D rigid-body modes (translations, rotation) on displacement unknowns."""
+    xy = locations - locations.mean(axis=0)
+    modes = np.zeros((len(xy), 3))
+    modes[fields == 0, 0] = 1.0
+    modes[fields == 1, 1] = 1.0
+    modes[:, 2] = np.where(fields == 0, -xy[:, 1], xy[:, 0])
+    return modes
+
+
+def _amg_u(A, locations, fields, paired):
+    """One V-cycle of smoothed-aggregation AMG on the displacement block, with the
+    rigid-body modes; 2 x 2 node blocks when the unknowns come in pairs."""
+    import pyamg
+
+    matrix = sp.bsr_matrix(A, blocksize=(2, 2)) if paired else A
+    return pyamg.smoothed_aggregation_solver(matrix, B=_rigid_modes(locations, fields),
+                                             max_coarse=MAX_COARSE).aspreconditioner()
+
+
+def _amg_schur(A, B, C, D, mass):
+    """One V-cycle of AMG on the fixed-stress Schur complement ``D - s diag(mass)``, s the
+    sign of ``C A^-1 B`` (from its diagonal), multiplied by ``t = -s`` to make its diagonal
+    positive. Returns the cycle of ``t S`` and t."""
+    import pyamg
+
+    simple = sp.csr_matrix(C.multiply(B.T)) @ (1.0 / A.diagonal())
+    sign = 1.0 if np.median(simple) >= 0 else -1.0
+    S = -sign * (D - sp.diags(sign * mass))
+    return (pyamg.smoothed_aggregation_solver(sp.csr_matrix(S), max_coarse=MAX_COARSE)
+            .aspreconditioner(), -sign)

@@ -1,0 +1,113 @@
+"""The iterative back-end (soil.krylov, ``SOILWATER_LINEAR_SOLVER=krylov``): its solves
+reach the tolerance they are asked for, and a run through it converges to the direct
+solver's history to the Newton tolerance."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import efg.solver
+import fem_reference.solver
+from soil.errors import InputError
+from soil.linear import Layout, factorise, linear_solver
+from soil.problems import load_case
+
+pytest.importorskip("pyamg")
+
+
+def biot(n=12, dt=1e-3, storage=0.0):
+    """A P1/P1-like u-p matrix on an n x n grid: an elastic block ``A`` (5-point
+    Laplacians on both components), the divergence coupling ``B`` and the continuity
+    block ``-(storage M + dt L)``; rows scaled as the solvers scale them."""
+    one = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(n, n))
+    L = sp.kronsum(one, one).tocsr()
+    grad = sp.diags([-0.5, 0.5], [-1, 1], shape=(n, n))
+    Gx, Gy = sp.kron(sp.eye(n), grad), sp.kron(grad, sp.eye(n))
+    A = sp.block_diag([L, L]) * 3.0 + sp.bmat([[Gx.T @ Gx, Gx.T @ Gy],
+                                                [Gy.T @ Gx, Gy.T @ Gy]]) * 2.0
+    B = sp.vstack([Gx.T, Gy.T])
+    D = -(storage * sp.eye(n * n) + dt * L)
+    K = sp.bmat([[A, B], [B.T, D]], format="csr")
+    xy = np.column_stack([c.ravel() for c in np.meshgrid(np.arange(n), np.arange(n))])
+    m = n * n
+    layout = Layout(groups=np.tile(np.arange(m), 3), fields=np.repeat([0, 1, 2], m),
+                    locations=np.tile(xy, (3, 1)).astype(float), scales=np.ones(3 * m),
+                    mass=np.concatenate([np.zeros(2 * m), np.ones(m)]), modulus=3.0)
+    return K, layout
+
+
+@pytest.mark.parametrize("dt", [0.0, 1e-3, 1.0])
+@pytest.mark.parametrize("rtol", [1e-3, 1e-9])
+def test_solve_reaches_the_tolerance_asked_for(monkeypatch, dt, rtol):
+    """Down to k = 0 (dt = 0: a zero pressure block but for the Dirichlet-free grid's
+    compressibility) the relative residual is at most rtol, and at 1e-9 the solution is
+    the direct one's."""
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "krylov")
+    K, layout = biot(dt=dt, storage=1e-3)
+    b = np.random.default_rng(1).standard_normal(K.shape[0])
+    solver = factorise(K, layout)
+    x = solver.solve(b, rtol=rtol)
+    assert np.linalg.norm(K @ x - b) <= 1.01 * rtol * np.linalg.norm(b)
+    assert 0 < solver.iterations < 200
+    if rtol < 1e-6:
+        exact = sp.linalg.spsolve(K.tocsc(), b)
+        assert np.abs(x - exact).max() < 1e-6 * np.abs(exact).max()
+
+
+def test_bordered_unknowns_are_eliminated(monkeypatch):
+    """A plate-like unknown coupled to many rows (field -1) is solved with the rest."""
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "krylov")
+    K, layout = biot(dt=1e-2)
+    n = K.shape[0]
+    e = np.zeros(n)
+    e[1:n // 3:2] = 1.0                                # all y displacements of a row
+    K = sp.bmat([[K, sp.csr_matrix(e[:, None])], [sp.csr_matrix(e[None]), None]],
+                format="csr")
+    layout = Layout(groups=np.append(layout.groups, -1), fields=np.append(layout.fields, -1),
+                    locations=np.vstack([layout.locations, [0.0, 0.0]]),
+                    scales=np.ones(n + 1), mass=np.append(layout.mass, 0.0), modulus=3.0)
+    b = np.random.default_rng(2).standard_normal(n + 1)
+    x = factorise(K, layout).solve(b, rtol=1e-10)
+    assert np.linalg.norm(K @ x - b) <= 1.01e-10 * np.linalg.norm(b)
+
+
+def test_krylov_needs_a_described_system(monkeypatch):
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "krylov")
+    K, _ = biot()
+    with pytest.raises(InputError, match="krylov needs"):
+        factorise(K, Layout(groups=np.zeros(K.shape[0], int)))
+
+
+def runs(case, method):
+    """The run of ``method`` with SuperLU and with the Krylov back-end."""
+    def solve():
+        if method == "efg":
+            return efg.solver.solve(case, progress=False)
+        return fem_reference.solver.solve(case, method, progress=False)
+
+    with linear_solver("superlu"):
+        direct = solve()
+    with linear_solver("krylov"):
+        krylov = solve()
+    return direct, krylov
+
+
+@pytest.mark.parametrize("name, method, overrides", [
+    ("unconfined-compression", "efg", ["efg.essential=\"nitsche\"", "time.end=1.2",
+                                       "time.steps=6"]),
+    ("unconfined-compression", "fem-p1p1-stab", ["time.end=1.2", "time.steps=6"]),
+    ("terzaghi", "efg", ["efg.essential=\"nitsche\"", "time.end=0.01"]),
+    ("mandel", "fem-th", ["time.end=0.01"]),
+    ("mandel", "efg", ["efg.essential=\"nitsche\"", "time.end=0.01"]),
+])
+def test_runs_agree_with_the_direct_solver(name, method, overrides):
+    """Inexact Newton through FGMRES converges to the same steps: p, q and the
+    settlement agree to 1e-6 of their range (the Newton tolerance is 1e-8 of the
+    scales); the Krylov iterations are counted per step."""
+    case = load_case(name, overrides)
+    direct, krylov = runs(case, method)
+    assert krylov.summary["linear_solver"].startswith("krylov pyamg")
+    assert krylov.summary["linear_iterations"] == krylov.history.linear_iterations.sum() > 0
+    for column in ("p", "q", "settlement"):
+        a, b = direct.history[column], krylov.history[column]
+        assert np.abs(a - b).max() <= 1e-6 * max(np.abs(a).max(), 1e-12), column
