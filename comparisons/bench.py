@@ -20,9 +20,9 @@ Writes ``reports/bench.md`` (targets of issue 7, ratios, growth exponents, memor
 
 import dataclasses
 import multiprocessing
+import multiprocessing.connection
 import os
 import platform
-import queue
 import resource
 import time
 
@@ -96,19 +96,63 @@ def one_step(method, nodes, material):
 
 
 def in_child(fn, *args, timeout=None):
-    """``fn(*args)`` in a forked child process (its own peak memory); None if the child
-    has not answered after ``timeout`` seconds (it is then killed)."""
+    """``fn(*args)`` in a forked child process, so its peak memory is its own.
+
+    Parameters
+    ----------
+    fn : callable
+        Called in the child; its value is sent back through a pipe (it must pickle).
+    timeout : float, optional
+        Seconds after which a child that has not answered is killed (None: no limit).
+
+    Returns
+    -------
+    value : object or None
+        ``fn(*args)``, or None when it did not come back.
+    status : str
+        ``"ok"``; ``"stopped at T s"`` (killed after ``timeout``); ``"died (signal N)"``
+        (killed by a signal: SIGKILL from the kernel's out-of-memory killer, a crash in
+        a native library) or ``"died (exit N)"`` without an answer; ``"failed: ..."``
+        (``fn`` raised; its first line). The parent waits on the pipe and the child's
+        sentinel together, so a dead child is noticed at once, not after ``timeout``.
+
+    Examples
+    --------
+    >>> in_child(pow, 2, 10)
+    (1024, 'ok')
+    >>> in_child(os._exit, 3)
+    (None, 'died (exit 3)')
+    """
     context = multiprocessing.get_context("fork")
-    answers = context.Queue()
-    child = context.Process(target=lambda: answers.put(fn(*args)))
+    reader, writer = context.Pipe(duplex=False)
+
+    def answer():
+        try:
+            message = (fn(*args), "ok")
+        except Exception as err:               # the run's own failure, told as a status
+            lines = str(err).strip().splitlines() or [""]
+            message = (None, f"failed: {type(err).__name__}: {lines[0]}".rstrip(": "))
+        writer.send(message)
+
+    child = context.Process(target=answer)
     child.start()
+    writer.close()                             # the child holds the only writing end
     try:
-        return answers.get(timeout=timeout)
-    except queue.Empty:
-        return None
+        ready = multiprocessing.connection.wait([reader, child.sentinel], timeout)
+        if reader in ready or reader.poll():
+            try:
+                return reader.recv()
+            except (EOFError, OSError):        # died while sending, or before
+                pass
+        elif not ready:
+            return None, f"stopped at {timeout:g} s"
+        child.join()
+        code = child.exitcode
+        return None, (f"died (signal {-code})" if code < 0 else f"died (exit {code})")
     finally:
         child.kill()
         child.join()
+        reader.close()
 
 
 def steps(sizes=SIZES, methods=METHODS, materials=MATERIALS, limit=TIME_LIMIT, progress=print):
@@ -123,11 +167,10 @@ def steps(sizes=SIZES, methods=METHODS, materials=MATERIALS, limit=TIME_LIMIT, p
     for nodes in sizes:
         for material in materials:
             for method in methods:
-                row = in_child(one_step, method, nodes, material, timeout=limit)
+                row, status = in_child(one_step, method, nodes, material, timeout=limit)
                 if row is None:
                     row = {"method": method, "material": material,
-                           "nodes": len(compression(nodes).nodes()),
-                           "status": f"stopped at {limit:.0f} s"}
+                           "nodes": len(compression(nodes).nodes()), "status": status}
                     progress(f"{method:9s} {material:8s} {row['nodes']:7d} nodes: "
                              f"{row['status']}")
                 else:

@@ -1,0 +1,39 @@
+"""``make bench`` machinery on tiny inputs: children that die or hang, the plan of runs,
+the targets' verdicts and the growth fits (no timing is asserted)."""
+
+import os
+import signal
+import time
+
+import pytest
+
+from comparisons import bench
+
+
+def _killed():
+    os.kill(os.getpid(), signal.SIGKILL)
+
+
+def _raises():
+    raise RuntimeError("no convergence\nsecond line")
+
+
+def test_in_child_returns_the_value():
+    assert bench.in_child(divmod, 7, 2, timeout=30) == ((3, 1), "ok")
+
+
+@pytest.mark.parametrize("fn,args,status", [
+    (os._exit, (3,), "died (exit 3)"),
+    (_killed, (), f"died (signal {int(signal.SIGKILL)})"),
+    (_raises, (), "failed: RuntimeError: no convergence"),
+])
+def test_in_child_reports_a_child_that_gives_no_answer_at_once(fn, args, status):
+    tic = time.perf_counter()
+    assert bench.in_child(fn, *args, timeout=60) == (None, status)
+    assert time.perf_counter() - tic < 20       # not the whole timeout
+
+
+def test_in_child_stops_a_child_that_hangs():
+    tic = time.perf_counter()
+    assert bench.in_child(time.sleep, 60, timeout=0.5) == (None, "stopped at 0.5 s")
+    assert time.perf_counter() - tic < 20
