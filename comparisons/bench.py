@@ -32,11 +32,14 @@ import skfem
 
 from efg.mls import ShapeFunctions
 from efg.quadrature import delaunay_cells
+from soil.errors import InputError
 from soil.linear import backend
 from soil.problems import load_case
 from soil.settings import DEFAULT_SCALE
 
 SIZES = (1_000, 3_000, 10_000, 30_000, 100_000)
+#: Smallest node count ``--sizes`` accepts (the grid has at least 10 x 13 nodes).
+MIN_SIZE = 100
 METHODS = ("efg", "fem-p1p1", "fem-th")
 MATERIALS = ("cam-clay", "elastic")
 #: Seconds after which one run is stopped (recorded, not timed).
@@ -47,6 +50,32 @@ ELASTIC = (("model", "elastic"), ("E", 200.0), ("nu", 0.3), ("p0", 3.0))
 PHASES = {"shape functions": "shape_functions_s", "cells": "cells_s",
           "assembly": "assembly_s", "solve": "solve_s", "constitutive": "material_s",
           "step": "total_s"}
+
+
+def parse_sizes(text):
+    """The node counts of ``--sizes``: comma-separated whole numbers, ``1e6`` allowed.
+
+    Raises
+    ------
+    InputError
+        One line naming the entry that is not a node count of at least :data:`MIN_SIZE`.
+
+    Examples
+    --------
+    >>> parse_sizes("1000, 3e5,1e6")
+    [1000, 300000, 1000000]
+    """
+    sizes = []
+    for part in text.split(","):
+        try:
+            value = float(part)
+        except ValueError:
+            value = np.nan
+        if not (np.isfinite(value) and value == round(value) and value >= MIN_SIZE):
+            raise InputError(f"--sizes {text!r}: {part.strip()!r} is not a node count; use "
+                             f"whole numbers of at least {MIN_SIZE}, e.g. 1000,3000,1e5")
+        sizes.append(int(value))
+    return sizes
 
 
 def compression(nodes, material="cam-clay"):

@@ -3,11 +3,16 @@ the targets' verdicts and the growth fits (no timing is asserted)."""
 
 import os
 import signal
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import pytest
 
 from comparisons import bench
+
+ROOT = Path(__file__).parents[1]
 
 
 def _killed():
@@ -37,3 +42,18 @@ def test_in_child_stops_a_child_that_hangs():
     tic = time.perf_counter()
     assert bench.in_child(time.sleep, 60, timeout=0.5) == (None, "stopped at 0.5 s")
     assert time.perf_counter() - tic < 20
+
+
+@pytest.mark.parametrize("sizes", ["1000,abc", "1000,", "1e3,2.5e3,0.5", "50", "nan", "1e400"])
+def test_bad_sizes_are_one_line_and_write_nothing(tmp_path, sizes):
+    proc = subprocess.run([sys.executable, "-m", "comparisons.cli", "bench", "--sizes", sizes,
+                           "--out", str(tmp_path / "bench.md")], cwd=ROOT,
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("soilwater: error: --sizes"), proc.stderr
+    assert not list(tmp_path.iterdir())
+
+
+def test_sizes_accept_exponents():
+    assert bench.parse_sizes("1000,3e5, 1e6") == [1000, 300_000, 1_000_000]
