@@ -33,17 +33,29 @@ import skfem
 from efg.mls import ShapeFunctions
 from efg.quadrature import delaunay_cells
 from soil.errors import InputError
-from soil.linear import backend
+from soil.linear import available, backend, linear_solver
 from soil.problems import load_case
 from soil.settings import DEFAULT_SCALE
 
-SIZES = (1_000, 3_000, 10_000, 30_000, 100_000)
+#: Requested node counts of the default run.
+SIZES = (1_000, 3_000, 10_000, 30_000, 100_000, 300_000, 1_000_000)
 #: Smallest node count ``--sizes`` accepts (the grid has at least 10 x 13 nodes).
 MIN_SIZE = 100
-METHODS = ("efg", "fem-p1p1", "fem-th")
+METHODS = ("efg", "fem-p1p1", "fem-th", "fem-p1p1-stab")
 MATERIALS = ("cam-clay", "elastic")
-#: Seconds after which one run is stopped (recorded, not timed).
+#: From this many (requested) nodes only :data:`LARGE_METHODS` with
+#: :data:`LARGE_MATERIALS` run, under :data:`LARGE_TIME_LIMIT`: issue 17's comparison,
+#: within the run time of the module docstring.
+LARGE_FROM = 300_000
+LARGE_METHODS = ("efg", "fem-p1p1-stab")
+LARGE_MATERIALS = ("cam-clay",)
+#: From this many (requested) nodes the tangents are solved by the iterative back-end
+#: ``soil.linear.linear_solver("krylov")``; below, by the direct one (:func:`direct`).
+KRYLOV_FROM = 300_000
+#: Seconds after which one run below :data:`LARGE_FROM` nodes is stopped (recorded, not
+#: timed); :data:`LARGE_TIME_LIMIT` from there.
 TIME_LIMIT = 240.0
+LARGE_TIME_LIMIT = 900.0
 #: Linear elastic skeleton of the elastic runs (kPa), at the case's p'0.
 ELASTIC = (("model", "elastic"), ("E", 200.0), ("nu", 0.3), ("p0", 3.0))
 #: Phase: its timer in ``summary["timings"]`` (:data:`soil.coupling.TIMERS`).
@@ -102,25 +114,103 @@ def compression(nodes, material="cam-clay"):
     return case
 
 
-def one_step(method, nodes, material):
-    """Run one step and return its phase times [s], counts and peak memory [MB]."""
+def direct():
+    """The direct back-end of the bench: ``"pardiso"`` where ``pypardiso`` imports, else
+    ``"superlu"`` (whatever ``SOILWATER_LINEAR_SOLVER`` says)."""
+    return "pardiso" if available("pardiso") else "superlu"
+
+
+def solver_for(nodes):
+    """The linear solver of a run of ``nodes`` requested nodes: :func:`direct` below
+    :data:`KRYLOV_FROM`, ``"krylov"`` from there.
+
+    Examples
+    --------
+    >>> solver_for(KRYLOV_FROM)
+    'krylov'
+    """
+    return "krylov" if nodes >= KRYLOV_FROM else direct()
+
+
+def time_limit(nodes):
+    """Seconds after which a run of ``nodes`` requested nodes is stopped."""
+    return LARGE_TIME_LIMIT if nodes >= LARGE_FROM else TIME_LIMIT
+
+
+def usable(solver):
+    """True if ``soil.linear.linear_solver(solver)`` accepts the back-end here (a
+    back-end it does not know, or PARDISO without pypardiso, raises InputError).
+
+    Examples
+    --------
+    >>> usable("superlu"), usable("no-such-solver")
+    (True, False)
+    """
+    try:
+        with linear_solver(solver):
+            return True
+    except InputError:
+        return False
+
+
+def plan(sizes=SIZES, methods=METHODS, materials=MATERIALS):
+    """The runs of :func:`steps`: ``(nodes, material, method, solver, limit)`` per run,
+    sizes in the given order; from :data:`LARGE_FROM` nodes only :data:`LARGE_METHODS`
+    with :data:`LARGE_MATERIALS`.
+
+    Examples
+    --------
+    >>> [run[:4] for run in plan([1_000_000], ("efg", "fem-th"))]
+    [(1000000, 'cam-clay', 'efg', 'krylov')]
+    """
+    return [(nodes, material, method, solver_for(nodes), time_limit(nodes))
+            for nodes in sizes for material in materials for method in methods
+            if nodes < LARGE_FROM or (method in LARGE_METHODS and material in LARGE_MATERIALS)]
+
+
+#: Columns of a row of :func:`steps`, in order.
+COLUMNS = ("method", "material", "nodes", "solver", "status", "dofs", "iterations",
+           "linear_iterations", "factorisations", "symmetric_factorisations",
+           "perturbed_pivots", "factor_flops", *PHASES, "factor_gflops_lb", "peak_mb",
+           "kb_per_node", "wall_s", "limit_s")
+
+
+def one_step(method, nodes, material, solver=None):
+    """Run one step under the linear back-end ``solver`` (None: :func:`backend`'s).
+
+    Returns
+    -------
+    dict
+        The :data:`COLUMNS` but ``factor_gflops_lb``: phase times [s]; counts (Newton
+        ``iterations`` summed over the step; ``linear_iterations``, the Krylov
+        iterations, and ``factor_flops``, the floating-point operations of all the run's
+        factorisations, where the back-end reports them in ``result.summary``, else
+        NaN); ``peak_mb``, the process's peak resident memory [MB = 10^6 bytes] and
+        ``kb_per_node`` [10^3 bytes per node].
+    """
     import efg.solver
     import fem_reference.solver
 
     case = compression(nodes, material)
-    tic = time.perf_counter()
-    result = (efg.solver.solve(case, progress=False) if method == "efg"
-              else fem_reference.solver.solve(case, method, progress=False))
-    wall = time.perf_counter() - tic
+    with linear_solver(solver):
+        name = backend() if solver is None else solver
+        tic = time.perf_counter()
+        result = (efg.solver.solve(case, progress=False) if method == "efg"
+                  else fem_reference.solver.solve(case, method, progress=False))
+        wall = time.perf_counter() - tic
     summary = result.summary
     row = {"method": method, "material": material, "nodes": len(case.nodes()),
-           "dofs": summary["dofs"], "iterations": int(result.history.iterations.sum()),
+           "solver": name, "status": "ok", "dofs": summary["dofs"],
+           "iterations": int(result.history.iterations.sum()),
+           "linear_iterations": float(summary.get("linear_iterations", np.nan)),
            "factorisations": summary["factorisations"],
            "symmetric_factorisations": summary["symmetric_factorisations"],
-           "perturbed_pivots": summary["perturbed_pivots"], "wall_s": wall, "status": "ok"}
+           "perturbed_pivots": summary["perturbed_pivots"],
+           "factor_flops": float(summary.get("factor_flops", np.nan)), "wall_s": wall}
     for phase, timer in PHASES.items():
         row[phase] = summary["timings"][timer]
-    row["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024.0   # bytes (Linux)
+    row["peak_mb"], row["kb_per_node"] = peak / 1e6, peak / 1e3 / row["nodes"]
     return row
 
 
@@ -184,29 +274,45 @@ def in_child(fn, *args, timeout=None):
         reader.close()
 
 
-def steps(sizes=SIZES, methods=METHODS, materials=MATERIALS, limit=TIME_LIMIT, progress=print):
-    """One step of every method, material and size; one row each (see :func:`one_step`).
+def steps(sizes=SIZES, methods=METHODS, materials=MATERIALS, limit=None, progress=print):
+    """One step of every run of :func:`plan`, each in its own child (:func:`in_child`).
 
-    A run still going after ``limit`` seconds is stopped and kept as a row of NaN times
-    with its status, so one pathological run cannot hold the benchmark.
+    A run still going after its limit (``limit`` seconds, or :func:`time_limit` when
+    None) is stopped; one whose child dies, raises, or whose back-end is not available
+    here (:func:`usable`) is kept too, as a row of NaN times with its ``status``, so one
+    pathological run cannot hold the benchmark. ``factor_gflops_lb`` = ``factor_flops``
+    / solve time [GF/s]: the solve time includes the analysis and the back-solves, so it
+    is a lower bound of the factorisation's rate.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per run, the :data:`COLUMNS` (``limit_s``: the run's time limit [s]).
     """
     for method in methods:                       # compile numba kernels, load MKL
-        one_step(method, 200, "cam-clay")
+        one_step(method, 200, "cam-clay", direct())
     rows = []
-    for nodes in sizes:
-        for material in materials:
-            for method in methods:
-                row, status = in_child(one_step, method, nodes, material, timeout=limit)
-                if row is None:
-                    row = {"method": method, "material": material,
-                           "nodes": len(compression(nodes).nodes()), "status": status}
-                    progress(f"{method:9s} {material:8s} {row['nodes']:7d} nodes: "
-                             f"{row['status']}")
-                else:
-                    progress(f"{method:9s} {material:8s} {row['nodes']:7d} nodes: step "
-                             f"{row['step']:8.2f} s, peak {row['peak_mb']:6.0f} MB")
-                rows.append(row)
-    return pd.DataFrame(rows)
+    for nodes, material, method, solver, seconds in plan(sizes, methods, materials):
+        seconds = seconds if limit is None else limit
+        if usable(solver):
+            row, status = in_child(one_step, method, nodes, material, solver,
+                                   timeout=seconds)
+        else:
+            row, status = None, f"{solver} not available"
+        if row is None:
+            row = {"method": method, "material": material,
+                   "nodes": len(compression(nodes).nodes()), "solver": solver,
+                   "status": status}
+            progress(f"{method:13s} {material:8s} {row['nodes']:7d} nodes, {solver:7s}: "
+                     f"{status}")
+        else:
+            progress(f"{method:13s} {material:8s} {row['nodes']:7d} nodes, {solver:7s}: "
+                     f"step {row['step']:8.2f} s, {row['iterations']} iterations, peak "
+                     f"{row['peak_mb']:6.0f} MB ({row['kb_per_node']:.0f} kB/node)")
+        rows.append({**row, "limit_s": seconds})
+    table = pd.DataFrame(rows).reindex(columns=list(COLUMNS))
+    table["factor_gflops_lb"] = table.factor_flops / table.solve / 1e9
+    return table
 
 
 def best_of(fn, repeat=3):
@@ -309,12 +415,13 @@ def targets(table, shapes, growth):
             e = efg[np.isclose(efg.nodes, nodes, rtol=0.1)]
             f = p1[np.isclose(p1.nodes, nodes, rtol=0.1)]
             if len(e) and len(f):
-                stopped = f.status.iloc[0] != "ok"
+                stopped = f.status.iloc[0].startswith("stopped")
                 rows.append((f"whole step / fem-p1p1 at equal nodes ({material})",
                              f"{e.nodes.iloc[0]} nodes"
                              + (f" (fem-p1p1 {f.status.iloc[0]}: an upper bound)"
                                 if stopped else ""),
-                             e.step.iloc[0] / (TIME_LIMIT if stopped else f.step.iloc[0]),
+                             e.step.iloc[0] / (f.limit_s.iloc[0] if stopped
+                                               else f.step.iloc[0]),
                              3.0))
     for _, row in growth[growth.method == "efg"].iterrows():
         for phase in PHASES:
