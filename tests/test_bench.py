@@ -57,3 +57,27 @@ def test_bad_sizes_are_one_line_and_write_nothing(tmp_path, sizes):
 
 def test_sizes_accept_exponents():
     assert bench.parse_sizes("1000,3e5, 1e6") == [1000, 300_000, 1_000_000]
+
+
+def test_numpy_blas_names_the_openblas_variables_it_was_loaded_with():
+    env = {**os.environ, "OPENBLAS_CORETYPE": "Prescott"}
+    env.pop("OPENBLAS_L2_SIZE", None)
+    code = "from comparisons import bench; print(bench.numpy_blas())"
+    line = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, check=True,
+                          capture_output=True, text=True, timeout=120).stdout
+    assert "OPENBLAS_CORETYPE Prescott, OPENBLAS_L2_SIZE unset" in line
+    if "core " in line and "core unknown" not in line:      # OpenBLAS says which kernel
+        assert "Haswell" not in line and "Zen" not in line and "SkylakeX" not in line
+
+
+def test_dgemm_rates_are_positive_and_mkl_is_measured_where_pardiso_is():
+    rates = bench.dgemm(300, repeat=1)
+    assert rates["n"] == 300 and rates["numpy_gflops"] > 0
+    assert (rates["mkl_gflops"] > 0) == bench.available("pardiso")
+
+
+def test_make_bench_unsets_the_openblas_variables_before_numpy_loads():
+    recipe = (ROOT / "Makefile").read_text().split("\nbench:")[1].split("\n\n")[0]
+    line = next(line for line in recipe.splitlines() if "soilwater bench" in line)
+    assert all(f"-u {name}" in line.split("soilwater")[0]
+               for name in bench.OPENBLAS_VARIABLES)
