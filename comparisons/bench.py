@@ -445,13 +445,57 @@ def shape_functions(sizes=SIZES, weight="quartic", scale=DEFAULT_SCALE):
     return pd.DataFrame(rows)
 
 
-def exponent(nodes, seconds):
-    """Least-squares slope of log(time) against log(nodes): the growth exponent."""
+def exponent(nodes, seconds, within=None):
+    """Least-squares slope of log(time) against log(nodes): the growth exponent.
+
+    Parameters
+    ----------
+    nodes, seconds : array_like
+        Node counts and times [s]; NaN or non-positive times (runs that did not
+        complete) are left out.
+    within : (float, float), optional
+        Fit only node counts from ``within[0] / 1.1`` to ``1.1 * within[1]`` (a grid's
+        count is within 10 % of the size asked for).
+
+    Returns
+    -------
+    float
+        The slope; NaN with fewer than two points.
+
+    Examples
+    --------
+    >>> round(exponent([1e3, 1e4, 1e5], [1.0, 10.0, 1000.0], within=(1e3, 1e4)), 12)
+    1.0
+    """
     nodes, seconds = np.asarray(nodes, float), np.asarray(seconds, float)
     keep = seconds > 0
+    if within is not None:
+        keep &= (nodes >= within[0] / 1.1) & (nodes <= 1.1 * within[1])
     if keep.sum() < 2:
         return np.nan
     return float(np.polyfit(np.log(nodes[keep]), np.log(seconds[keep]), 1)[0])
+
+
+def verdict(measured, limit):
+    """``"yes"`` where ``measured <= limit``, ``"**no**"`` where not, ``"not measured"``
+    where ``measured`` is NaN (its run did not complete): never "yes" without a value.
+
+    Examples
+    --------
+    >>> verdict([1.0, 3.0, np.nan], 2.0).tolist()
+    ['yes', '**no**', 'not measured']
+    """
+    measured = np.asarray(measured, float)
+    return np.where(np.isnan(measured), "not measured",
+                    np.where(measured <= limit, "yes", "**no**"))
+
+
+def pick(table, method, material, nodes):
+    """The row of ``method`` and ``material`` at the size ``nodes`` asked for (its grid's
+    count within 10 %), or None if there was no such run."""
+    rows = table[(table.method == method) & (table.material == material)
+                 & np.isclose(table.nodes, nodes, rtol=0.1)]
+    return rows.iloc[0] if len(rows) else None
 
 
 def at(x, xs, ys):
@@ -478,54 +522,143 @@ def ratios(table):
 
 
 def exponents(table):
-    """Growth exponent of every phase, per method and material."""
+    """Growth exponent of every phase, per method, material and linear solver, fitted on
+    the runs that completed (``from`` and ``to``: the node counts of the fit)."""
     rows = []
-    for (method, material), group in table.groupby(["method", "material"], sort=False):
-        row = {"method": method, "material": material}
+    ok = table[table.status == "ok"]
+    for (method, material, solver), group in ok.groupby(["method", "material", "solver"],
+                                                        sort=False):
+        row = {"method": method, "material": material, "solver": solver,
+               "from": group.nodes.min(), "to": group.nodes.max()}
         for phase in PHASES:
             row[phase] = exponent(group.nodes, group[phase])
         rows.append(row)
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows, columns=["method", "material", "solver", "from", "to",
+                                       *PHASES])
 
 
 def targets(table, shapes, growth):
-    """The speed targets: measured value, target and verdict, one row each."""
+    """Issue 7's speed targets: measured value, target and verdict, one row each.
+
+    A "whole step / fem-p1p1" row whose fem-p1p1 run was stopped compares with its time
+    limit: an upper bound of the ratio. Growth exponents are of the direct solver's runs.
+    """
     rows = []
-    largest = shapes.iloc[-1]
-    for basis in ("P2", "P1"):
-        rows.append((f"shape functions / CellBasis({basis}), same points",
-                     f"{int(largest.nodes)} nodes, {int(largest.points)} points",
-                     largest.efg_s / largest[f"{basis}_s"], 1.5))
+    ok = table[table.status == "ok"]
+    if len(shapes):
+        largest = shapes.iloc[-1]
+        for basis in ("P2", "P1"):
+            rows.append((f"shape functions / CellBasis({basis}), same points",
+                         f"{int(largest.nodes)} nodes, {int(largest.points)} points",
+                         largest.efg_s / largest[f"{basis}_s"], 1.5))
     for material in MATERIALS:
-        efg = table[(table.method == "efg") & (table.material == material)]
-        th = table[(table.method == "fem-th") & (table.material == material)]
+        efg = ok[(ok.method == "efg") & (ok.material == material) & (ok.factorisations > 0)]
+        th = ok[(ok.method == "fem-th") & (ok.material == material) & (ok.factorisations > 0)]
         for _, row in efg.iterrows():
-            fem = at(row.dofs, th.dofs, th.assembly / th.factorisations)
+            fem = at(row.dofs, th.dofs, th.assembly / th.factorisations) if len(th) else np.nan
             if fem == fem:
                 rows.append((f"assembly per tangent / fem-th at equal DOFs ({material})",
                              f"{row.nodes} nodes, {int(row.dofs)} DOFs",
                              row.assembly / row.factorisations / fem, 2.0))
-        p1 = table[(table.method == "fem-p1p1") & (table.material == material)]
         for nodes in (10_000, 100_000):
-            e = efg[np.isclose(efg.nodes, nodes, rtol=0.1)]
-            f = p1[np.isclose(p1.nodes, nodes, rtol=0.1)]
-            if len(e) and len(f):
-                stopped = f.status.iloc[0].startswith("stopped")
+            e = pick(table, "efg", material, nodes)
+            f = pick(table, "fem-p1p1", material, nodes)
+            if e is not None and f is not None:
+                stopped = f.status.startswith("stopped")
                 rows.append((f"whole step / fem-p1p1 at equal nodes ({material})",
-                             f"{e.nodes.iloc[0]} nodes"
-                             + (f" (fem-p1p1 {f.status.iloc[0]}: an upper bound)"
-                                if stopped else ""),
-                             e.step.iloc[0] / (f.limit_s.iloc[0] if stopped
-                                               else f.step.iloc[0]),
-                             3.0))
-    for _, row in growth[growth.method == "efg"].iterrows():
+                             f"{e.nodes} nodes" + (f" (fem-p1p1 {f.status}: an upper bound)"
+                                                   if stopped else ""),
+                             e.step / (f.limit_s if stopped else f.step), 3.0))
+    direct = growth[(growth.method == "efg") & (growth.solver != "krylov")]
+    for _, row in direct.iterrows():
         for phase in PHASES:
             if phase != "solve":
                 rows.append((f"growth exponent, EFG {phase} ({row.material})",
-                             f"{table.nodes.min()} to {table.nodes.max()} nodes",
+                             f"{row['from']} to {row['to']} nodes, {row.solver}",
                              row[phase], 1.2))
     frame = pd.DataFrame(rows, columns=["target", "where", "measured", "limit"])
-    frame["met"] = np.where(frame.measured <= frame.limit, "yes", "**no**")
+    frame["met"] = verdict(frame.measured, frame.limit)
+    return frame
+
+
+#: Issue 17's EFG Cam-clay step at 10^5 nodes [s], measured on its CPU
+#: (:data:`BASELINE_CPU`): its first target is half of it.
+BASELINE_STEP = 32.1
+BASELINE_CPU = "AMD EPYC, 2 cores"
+#: Memory of issue 17's one machine [GB = 10^9 bytes]: 24 GiB.
+MACHINE_GB = 24 * 2**30 / 1e9
+
+
+def issue17_targets(table, machine_name="this machine"):
+    """Issue 17's targets: measured value, target and verdict, one row each.
+
+    A target whose run did not complete is "not measured" (:func:`verdict`), with the
+    run's status, and where it bounds the value, the bound, in ``where``. EFG and
+    fem-p1p1-stab are compared at equal nodes, each on the solver the bench chose for
+    the size (:func:`solver_for`): their best one here.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The rows of :func:`steps`.
+    machine_name : str
+        Where the runs were measured (:func:`cpu`), for the first target's baseline.
+    """
+    rows = []
+
+    def at_size(nodes, column, scale, what, limit, note=""):
+        row = pick(table, "efg", "cam-clay", nodes)
+        if row is None:
+            rows.append((what, f"no run at {nodes:.0e} nodes", np.nan, limit))
+            return
+        done = row.status == "ok"
+        rows.append((what, f"{row.nodes} nodes, {row.solver}"
+                     + ("" if done else f", {row.status}") + note,
+                     row[column] * scale if done else np.nan, limit))
+
+    at_size(100_000, "step", 1.0, "EFG Cam-clay step at 1e5 nodes [s]", 0.5 * BASELINE_STEP,
+            f", measured on {machine_name}; limit 0.5 x {BASELINE_STEP} s, issue 17's step "
+            f"on its {BASELINE_CPU}, not in this run (the CPU may differ)")
+    at_size(100_000, "peak_mb", 1e-3, "EFG Cam-clay peak memory at 1e5 nodes [GB]", 3.0)
+    at_size(1_000_000, "step", 1.0, "EFG Cam-clay step at 1e6 nodes [s]", 600.0)
+    at_size(1_000_000, "peak_mb", 1e-3, "EFG Cam-clay peak memory at 1e6 nodes [GB]",
+            MACHINE_GB, f"; limit 24 GiB; this machine has {ram_gb():.1f} GB")
+
+    efg = table[(table.method == "efg") & (table.material == "cam-clay")]
+    fit = exponent(efg.nodes, efg.step, within=(1e4, 1e6))
+    done = efg[(efg.status == "ok") & (efg.nodes >= 1e4 / 1.1) & (efg.nodes <= 1.1e6)]
+    ends = [pick(table, "efg", "cam-clay", n) for n in (10_000, 1_000_000)]
+    whole = all(row is not None and row.status == "ok" for row in ends)
+    where = (f"{done.nodes.min()} to {done.nodes.max()} nodes, "
+             f"{', '.join(dict.fromkeys(done.solver))}" if len(done) > 1
+             else "fewer than two sizes completed")
+    if not whole and fit == fit:
+        where += f" only (fit {fit:.2f}): 1e4 or 1e6 did not complete or was not run"
+    rows.append(("EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes", where,
+                 fit if whole else np.nan, 1.15))
+
+    stab = table[table.method == "fem-p1p1-stab"]
+    for _, e in table[table.method == "efg"].iterrows():
+        f = stab[(stab.material == e.material) & (stab.nodes == e.nodes)]
+        if not len(f):
+            continue
+        f = f.iloc[0]
+        where = f"{e.nodes} nodes, {e.solver}"
+        if e.status == "ok" and f.status == "ok":
+            ratio = e.step / f.step
+        else:
+            ratio = np.nan
+            for name, row in (("efg", e), ("fem-p1p1-stab", f)):
+                if row.status != "ok":
+                    where += f"; {name} {row.status}"
+            if e.status == "ok" and f.status.startswith("stopped"):
+                where += f": ratio < {e.step / f.limit_s:.3g}"
+            elif f.status == "ok" and e.status.startswith("stopped"):
+                where += f": ratio > {e.limit_s / f.step:.3g}"
+        rows.append((f"EFG step / fem-p1p1-stab step at equal nodes ({e.material})", where,
+                     ratio, 2.0))
+    frame = pd.DataFrame(rows, columns=["target", "where", "measured", "limit"])
+    frame["met"] = verdict(frame.measured, frame.limit)
     return frame
 
 
@@ -564,6 +697,11 @@ def cpu():
                         if line.startswith("model name"))
     except (OSError, StopIteration):
         return platform.processor() or platform.machine()
+
+
+def ram_gb():
+    """This machine's physical memory [GB = 10^9 bytes]."""
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 1e9
 
 
 def machine():
