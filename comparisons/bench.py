@@ -1,21 +1,39 @@
 """``make bench``: speed and scale as ratios against scikit-fem in the same run.
 
-Two measurements, both on this machine in one command (never timed tests):
+Three measurements, all on this machine in one command (never timed tests):
 
-1. **One coupled step** of the unconfined-compression geometry (grid layout, 3 x 4 m, one
-   step of 0.2 % axial strain) at about 10^3, 3 x 10^3, ..., 10^5 nodes, with the Cam-clay
-   skeleton of the case and with a linear elastic one, for ``efg``, ``fem-p1p1`` and
-   ``fem-th`` on the same vertices. The solvers' own phase timers
-   (:data:`soil.coupling.TIMERS`) give shape functions (FEM: basis construction), background
-   cells (FEM: moving the mesh), assembly of the tangent, linear solve (factorisations and
-   back-substitutions), constitutive update, and the whole step. Each
-   run is a forked child process, so its peak resident memory is its own.
-2. **Shape functions alone**: MLS values and gradients against scikit-fem's
-   ``CellBasis`` construction (P1 and P2) at the same quadrature points (3 per triangle of
-   the Delaunay triangulation of the nodes).
+1. **dgemm**, the yardstick of the factorisation's rate (issue 17): ``C = A B`` of two
+   3000 x 3000 float64 matrices through NumPy's BLAS and through MKL's ``cblas_dgemm``
+   (the library PARDISO runs on), GF/s = 2 n^3 / best time. OpenBLAS reads
+   ``OPENBLAS_CORETYPE`` and ``OPENBLAS_L2_SIZE`` when NumPy loads it, so ``make bench``
+   unsets both for this command only (``env -u`` in the Makefile); the run records the
+   kernel it got.
+2. **One coupled step** of the unconfined-compression geometry (grid layout, 3 x 4 m, one
+   step of 0.2 % axial strain) at about 10^3, 3 x 10^3, ..., 10^6 nodes (:data:`SIZES`)
+   for ``efg``, ``fem-p1p1``, ``fem-th`` and ``fem-p1p1-stab`` on the same vertices, with
+   the Cam-clay skeleton of the case and with a linear elastic one. The rule that keeps
+   the whole run within about 60 to 75 minutes on 2 cores: from 3 x 10^5 nodes
+   (:data:`LARGE_FROM`) only ``efg`` and ``fem-p1p1-stab`` with Cam-clay run, and a run
+   is stopped after 900 s there, 240 s below (:func:`time_limit`). The sizes up to 10^5
+   took about 10 minutes before fem-p1p1-stab was added; the four large runs are bounded
+   by 4 x 900 s. The linear solver is chosen by size (:func:`solver_for`): the direct
+   one, PARDISO where ``pypardiso`` is installed, else SuperLU, below 3 x 10^5 nodes
+   (:data:`KRYLOV_FROM`), and ``soil.linear.linear_solver("krylov")`` from there. The
+   solvers' own phase timers (:data:`soil.coupling.TIMERS`) give shape functions (FEM:
+   basis construction), background cells (FEM: moving the mesh), assembly of the
+   tangent, linear solve (analysis, factorisations and back-substitutions), constitutive
+   update, and the whole step; each row adds the solver, Newton and Krylov iterations,
+   the flops of the factorisations and their rate (a lower bound: flops / solve time),
+   and peak memory per node. Each run is a forked child process, so its peak resident
+   memory is its own; a run stopped, killed (out of memory) or failed, or whose solver
+   is not available here, is a row with its status.
+3. **Shape functions alone** up to 10^5 nodes: MLS values and gradients against
+   scikit-fem's ``CellBasis`` construction (P1 and P2) at the same quadrature points
+   (3 per triangle of the Delaunay triangulation of the nodes).
 
-Writes ``reports/bench.md`` (targets of issue 7, ratios, growth exponents, memory),
-``reports/tables/bench.csv`` (every timing) and ``reports/figures/bench.png``.
+Writes ``reports/bench.md`` (targets of issues 17 and 7, factorisation rate against
+dgemm, ratios, growth exponents, memory), ``reports/tables/bench.csv`` (every run) and
+``reports/figures/bench.png``.
 """
 
 import ctypes
@@ -57,6 +75,9 @@ KRYLOV_FROM = 300_000
 #: timed); :data:`LARGE_TIME_LIMIT` from there.
 TIME_LIMIT = 240.0
 LARGE_TIME_LIMIT = 900.0
+#: Largest (requested) size of the shape-function comparison (issue 7's); beyond it the
+#: MLS build would take minutes and gigabytes in the bench's own process.
+SHAPES_UP_TO = 100_000
 #: Order of the dgemm of :func:`dgemm` (3 x 72 MB of matrices, about a second).
 DGEMM_N = 3000
 #: OpenBLAS reads these when it loads and picks its kernels and blocking from them;
@@ -442,7 +463,7 @@ def shape_functions(sizes=SIZES, weight="quartic", scale=DEFAULT_SCALE):
             row[f"{name}_s"] = best_of(
                 lambda element=element: skfem.CellBasis(mesh, element, intorder=2))
         rows.append(row)
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows, columns=["nodes", "points", "efg_s", "P1_s", "P2_s"])
 
 
 def exponent(nodes, seconds, within=None):
@@ -663,27 +684,50 @@ def issue17_targets(table, machine_name="this machine"):
 
 
 def figure(table, path):
-    """Log-log time against nodes, one panel per phase; Cam-clay solid, elastic dashed."""
+    """Log-log time against nodes, one panel per phase: Cam-clay solid with circles,
+    elastic dashed with squares; filled markers on the direct solver, open ones on the
+    iterative one (``krylov``); in the step panel, a run stopped at its time limit is a
+    triangle at that limit (its time is longer). Runs that died or did not run are not
+    drawn (the tables list them)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
     fig, axes = plt.subplots(2, 3, figsize=(12, 7), sharex=True, constrained_layout=True)
-    colours = dict(zip(METHODS, ("C0", "C1", "C2"), strict=True))
+    colours = dict(zip(METHODS, ("C0", "C1", "C2", "C3"), strict=True))
+    ok = table[table.status == "ok"]
     for ax, phase in zip(axes.ravel(), PHASES, strict=True):
-        for (method, material), group in table.groupby(["method", "material"], sort=False):
-            if group[phase].notna().any():
-                ax.loglog(group.nodes, group[phase], "o-" if material == "cam-clay" else "s--",
-                          color=colours[method], label=f"{method}, {material}", ms=4)
-        n = np.array([table.nodes.min(), table.nodes.max()], float)
-        reference = table[table.method == "efg"][phase].min()
-        ax.loglog(n, reference * (n / n[0]) ** 1.2, ":", color="grey", label="N^1.2")
+        for (method, material), group in ok.groupby(["method", "material"], sort=False):
+            if not group[phase].notna().any():
+                continue
+            colour, marker = colours[method], "o" if material == "cam-clay" else "s"
+            ax.loglog(group.nodes, group[phase], "-" if material == "cam-clay" else "--",
+                      color=colour, label=f"{method}, {material}")
+            for krylov, part in group.groupby(group.solver == "krylov"):
+                ax.loglog(part.nodes, part[phase], marker, color=colour, ms=4,
+                          mfc="none" if krylov else colour)
+        if phase == "step":
+            stopped = table[table.status.str.startswith("stopped")]
+            for method, group in stopped.groupby("method"):
+                ax.loglog(group.nodes, group.limit_s, "^", color=colours[method], ms=7,
+                          mfc="none")
+        reference = ok[ok.method == "efg"][phase].min()
+        if reference == reference:
+            n = np.array([ok.nodes.min(), ok.nodes.max()], float)
+            ax.loglog(n, reference * (n / n[0]) ** 1.2, ":", color="grey", label="N^1.2")
         ax.set_title(phase)
         ax.set_xlabel("nodes")
         ax.set_ylabel("time [s]")
         ax.grid(True, which="both", alpha=0.3)
-    axes[0, 0].legend(fontsize=7)
+    handles, _ = axes[0, 0].get_legend_handles_labels()
+    handles += [Line2D([], [], marker="o", ls="none", color="k", ms=4, label="direct solver"),
+                Line2D([], [], marker="o", ls="none", color="k", ms=4, mfc="none",
+                       label="krylov"),
+                Line2D([], [], marker="^", ls="none", color="k", ms=7, mfc="none",
+                       label="stopped at its limit (step)")]
+    axes[0, 0].legend(handles=handles, fontsize=7)
     fig.suptitle("One step of unconfined compression (0.2 % strain): phase times")
     fig.savefig(path, dpi=120)
     plt.close(fig)
@@ -705,48 +749,121 @@ def ram_gb():
 
 
 def machine():
-    """One line naming the machine, the solver back-end and the main versions."""
+    """One line naming the machine, its memory, the solvers and the main versions."""
     import numba
     import scipy
 
-    return (f"{cpu()}, {os.cpu_count()} cores; linear solver {backend()}; Python "
+    return (f"{cpu()}, {os.cpu_count()} cores, {ram_gb():.1f} GB; linear solver {direct()} "
+            f"below {KRYLOV_FROM} nodes, krylov from there; Python "
             f"{platform.python_version()}, NumPy {np.__version__}, SciPy {scipy.__version__}, "
             f"scikit-fem {skfem.__version__}, numba {numba.__version__}")
 
 
+def rates(table, yardstick):
+    """The factorisation rate of every run that reported its flops, against dgemm.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The rows of :func:`steps`.
+    yardstick : dict
+        :func:`dgemm`'s rates [GF/s].
+
+    Returns
+    -------
+    pandas.DataFrame
+        Method, material, nodes, solver, ``factor_flops``, ``solve`` [s],
+        ``factor_gflops_lb`` [GF/s] and its fractions of MKL's and NumPy's dgemm rates.
+    """
+    done = table[table.factor_flops.notna() & (table.status == "ok")]
+    return done[["method", "material", "nodes", "solver", "factor_flops", "solve",
+                 "factor_gflops_lb"]].assign(
+        of_mkl_dgemm=done.factor_gflops_lb / yardstick["mkl_gflops"],
+        of_numpy_dgemm=done.factor_gflops_lb / yardstick["numpy_gflops"])
+
+
 def run(path="reports/bench.md", sizes=SIZES):
-    """Run both benchmarks, write the Markdown, CSV and figure, and print the targets."""
+    """Run the benchmarks, write the Markdown, CSV and figure, and print the targets.
+
+    The dgemm yardstick (:func:`dgemm`, in its own child), then one step of every run of
+    :func:`plan` (:func:`steps`), then shape functions alone up to :data:`SHAPES_UP_TO`
+    nodes (:func:`shape_functions`).
+    """
     from comparisons.tables import to_markdown
 
     root = os.path.dirname(path) or "."
     os.makedirs(os.path.join(root, "tables"), exist_ok=True)
     os.makedirs(os.path.join(root, "figures"), exist_ok=True)
     tic = time.perf_counter()
+    yardstick, status = in_child(dgemm, DGEMM_N, timeout=600)
+    if yardstick is None:
+        yardstick = {"n": DGEMM_N, "numpy_gflops": np.nan, "mkl_gflops": np.nan,
+                     "numpy_blas": f"dgemm {status}", "mkl": f"dgemm {status}"}
+    print(f"dgemm n = {DGEMM_N}: NumPy {yardstick['numpy_gflops']:.1f} GF/s "
+          f"({yardstick['numpy_blas']}); MKL {yardstick['mkl_gflops']:.1f} GF/s")
     table = steps(sizes)
-    shapes = shape_functions(sizes)
+    shapes = shape_functions([nodes for nodes in sizes if nodes <= SHAPES_UP_TO])
     growth = exponents(table)
     goals = targets(table, shapes, growth)
+    goals17 = issue17_targets(table, cpu())
     table.to_csv(os.path.join(root, "tables", "bench.csv"), index=False)
     figure(table, os.path.join(root, "figures", "bench.png"))
     largest = table[table.nodes == table.nodes.max()]
-    memory = ", ".join(f"{r.method} {r.material} " + (f"{r.peak_mb:.0f} MB" if r.status == "ok"
-                                                        else r.status)
+    memory = ", ".join(f"{r.method} {r.material} "
+                       + (f"{r.peak_mb:.0f} MB ({r.kb_per_node:.0f} kB/node)"
+                          if r.status == "ok" else r.status)
                        for r in largest.itertuples())
     shapes = shapes.assign(over_P1=shapes.efg_s / shapes.P1_s,
                            over_P2=shapes.efg_s / shapes.P2_s)
+    measured = rates(table, yardstick)
+    seconds = time.perf_counter() - tic
     text = "\n".join([
         "# Benchmarks (`make bench`)", "",
-        f"Measured in one run of {time.perf_counter() - tic:.0f} s on {machine()}. "
+        f"Measured in one run of {seconds:.0f} s on {machine()}. "
         "One step of the unconfined-compression geometry (grid layout, 0.2 % axial "
         "strain) per method, material and size, each in its own forked process. "
+        f"From {LARGE_FROM} nodes only {' and '.join(LARGE_METHODS)} run, with "
+        f"{' and '.join(LARGE_MATERIALS)}. The linear solver is chosen by size: "
+        f"{direct()} below {KRYLOV_FROM} nodes, the iterative back-end (krylov) from "
+        "there; each row names its own. A run is stopped after "
+        f"{TIME_LIMIT:.0f} s ({LARGE_TIME_LIMIT:.0f} s from {LARGE_FROM} nodes). "
         "Times are the solvers' phase timers [s]; the step includes everything the "
         "solver does in it (shape functions or bases, cells, every Newton iteration). "
-        "EFG assembly includes building the sparse pattern of the step.", "",
+        "EFG assembly includes building the sparse pattern of the step. Memory is the "
+        "whole process's peak resident set [MB = 10^6 bytes; kB = 10^3 bytes per node], "
+        "the interpreter and libraries included.", "",
+        "## Targets (issue 17)", "",
+        "A target whose run did not complete is \"not measured\"; `where` gives the "
+        "run's status and, when it bounds the value, the bound.", "",
+        to_markdown(goals17, "{:.3g}"),
+        "## Factorisation rate against dgemm", "",
+        f"dgemm of two {yardstick['n']} x {yardstick['n']} float64 matrices, best of 3, "
+        f"in this run: NumPy's BLAS ({yardstick['numpy_blas']}) "
+        f"{yardstick['numpy_gflops']:.1f} GF/s; MKL ({yardstick['mkl']}), the library "
+        f"PARDISO factorises with, {yardstick['mkl_gflops']:.1f} GF/s. PARDISO's rate is "
+        "compared with MKL's dgemm (NumPy's for reference). `factor_gflops_lb` is the "
+        "floating-point operations of all the run's factorisations (the back-end's count, "
+        "`factor_flops`) divided by the solve time, which also holds the analysis "
+        "(ordering) and the back-solves: a lower bound of the factorisation's rate "
+        "[GF/s = 10^9 flop/s].", "",
+        to_markdown(measured, "{:.3g}") if len(measured) else
+        "No run reported `factor_flops` (`result.summary` has no count from its linear "
+        "back-end): the factorisation rate is not measured.\n",
         "## Targets (issue 7)", "", to_markdown(goals, "{:.3g}"),
         "## Phase times [s]", "",
-        to_markdown(table.drop(columns="wall_s"), "{:.3g}"),
+        to_markdown(table[["method", "material", "nodes", "solver", "status", *PHASES]],
+                    "{:.3g}"),
+        "## Counts, memory and rates", "",
+        "Newton `iterations` summed over the step, `linear_iterations` the Krylov "
+        "iterations (- where the back-end reports none), `factor_flops` as above, "
+        "`limit_s` the run's time limit [s].", "",
+        to_markdown(table[["method", "material", "nodes", "solver", "dofs", "iterations",
+                           "linear_iterations", "factorisations",
+                           "symmetric_factorisations", "perturbed_pivots", "factor_flops",
+                           "factor_gflops_lb", "peak_mb", "kb_per_node", "limit_s"]],
+                    "{:.3g}"),
         "## EFG / FEM at equal nodes", "", to_markdown(ratios(table), "{:.3g}"),
-        "## Growth exponents (least squares of log time on log nodes)", "",
+        "## Growth exponents (least squares of log time on log nodes, completed runs)", "",
         to_markdown(growth, "{:.2f}"),
         "## Shape functions alone: MLS against CellBasis at the same points [s]", "",
         to_markdown(shapes, "{:.3g}"),
@@ -754,5 +871,6 @@ def run(path="reports/bench.md", sizes=SIZES):
         "", "![bench](figures/bench.png)", ""])
     with open(path, "w") as fh:
         fh.write(text)
+    print(to_markdown(goals17, "{:.3g}"))
     print(to_markdown(goals, "{:.3g}"))
     return table

@@ -204,3 +204,17 @@ def test_issue7_targets_survive_runs_that_did_not_complete():
                   ("fem-p1p1", 10_296, 2.0, "ok", "pardiso", 0))
     goals = bench.targets(table, pd.DataFrame(), bench.exponents(table))
     assert goals.met.tolist() == ["not measured"]
+
+
+def test_run_writes_both_target_tables_the_rates_and_the_figure(tmp_path, monkeypatch):
+    monkeypatch.setattr(bench, "DGEMM_N", 200)
+    monkeypatch.setattr(bench, "SHAPES_UP_TO", 0)            # no shape functions
+    table = bench.run(str(tmp_path / "bench.md"), sizes=[200])
+    assert (table.status == "ok").all() and set(table.method) == set(bench.METHODS)
+    text = (tmp_path / "bench.md").read_text()
+    for heading in ("## Targets (issue 17)", "## Targets (issue 7)",
+                    "## Factorisation rate against dgemm", "## Counts, memory and rates"):
+        assert heading in text
+    assert "dgemm of two 200 x 200 float64 matrices" in text
+    assert (tmp_path / "figures" / "bench.png").stat().st_size > 0
+    assert list(pd.read_csv(tmp_path / "tables" / "bench.csv").columns) == list(bench.COLUMNS)
