@@ -630,7 +630,8 @@ def issue17_targets(table, machine_name="this machine"):
     def at_size(nodes, column, scale, what, limit, note=""):
         row = pick(table, "efg", "cam-clay", nodes)
         if row is None:
-            rows.append((what, f"no run at {nodes:.0e} nodes", np.nan, limit))
+            size = f"{nodes:.0e}".replace("e+0", "e")
+            rows.append((what, f"no run at {size} nodes", np.nan, limit))
             return
         done = row.status == "ok"
         rows.append((what, f"{row.nodes} nodes, {row.solver}"

@@ -186,7 +186,7 @@ def test_issue17_growth_needs_both_ends_and_a_missing_size_is_not_measured():
     goals = bench.issue17_targets(table).set_index("target")
     growth = goals.loc["EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes"]
     assert growth.met == "not measured" and "only (fit 1.0" in growth["where"]
-    assert goals.loc["EFG Cam-clay step at 1e6 nodes [s]"]["where"] == "no run at 1e+06 nodes"
+    assert goals.loc["EFG Cam-clay step at 1e6 nodes [s]"]["where"] == "no run at 1e6 nodes"
     assert goals.loc["EFG Cam-clay step at 1e6 nodes [s]"].met == "not measured"
 
 
@@ -218,3 +218,13 @@ def test_run_writes_both_target_tables_the_rates_and_the_figure(tmp_path, monkey
     assert "dgemm of two 200 x 200 float64 matrices" in text
     assert (tmp_path / "figures" / "bench.png").stat().st_size > 0
     assert list(pd.read_csv(tmp_path / "tables" / "bench.csv").columns) == list(bench.COLUMNS)
+
+
+def test_figure_draws_krylov_and_stopped_runs(tmp_path):
+    table = _rows(("efg", 10_296, 1.0, "ok", "pardiso", 500.0),
+                  ("efg", 300_675, 30.0, "ok", "krylov", 500.0),
+                  ("fem-p1p1-stab", 10_296, 0.5, "ok", "pardiso", 0),
+                  ("fem-p1p1-stab", 300_675, 0, "stopped at 900 s", "krylov", 0),
+                  ("efg", 1_004_276, 0, "died (signal 9)", "krylov", 0))
+    bench.figure(table, tmp_path / "bench.png")
+    assert (tmp_path / "bench.png").stat().st_size > 0
