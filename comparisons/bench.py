@@ -214,7 +214,8 @@ def one_step(method, nodes, material, solver=None):
         iterations, and ``factor_flops``, the floating-point operations of all the run's
         factorisations, where the back-end reports them in ``result.summary``, else
         NaN); ``peak_mb``, the process's peak resident memory [MB = 10^6 bytes] and
-        ``kb_per_node`` [10^3 bytes per node].
+        ``kb_per_node`` [10^3 bytes per node]. A count the back-end does not report
+        (an iterative one need not factorise) is NaN.
     """
     import efg.solver
     import fem_reference.solver
@@ -231,9 +232,9 @@ def one_step(method, nodes, material, solver=None):
            "solver": name, "status": "ok", "dofs": summary["dofs"],
            "iterations": int(result.history.iterations.sum()),
            "linear_iterations": float(summary.get("linear_iterations", np.nan)),
-           "factorisations": summary["factorisations"],
-           "symmetric_factorisations": summary["symmetric_factorisations"],
-           "perturbed_pivots": summary["perturbed_pivots"],
+           "factorisations": summary.get("factorisations", np.nan),
+           "symmetric_factorisations": summary.get("symmetric_factorisations", np.nan),
+           "perturbed_pivots": summary.get("perturbed_pivots", np.nan),
            "factor_flops": float(summary.get("factor_flops", np.nan)), "wall_s": wall}
     for phase, timer in PHASES.items():
         row[phase] = summary["timings"][timer]
