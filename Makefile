@@ -20,10 +20,12 @@ report: $(STAMP)
 	$(BIN)/python -m pip install --quiet -e '.[fast]'
 	$(BIN)/soilwater report
 
-# The benchmark adds the optional PARDISO solver (x86_64; SuperLU elsewhere).
+# The benchmark adds the optional PARDISO solver (x86_64; SuperLU elsewhere). OpenBLAS
+# reads OPENBLAS_CORETYPE and OPENBLAS_L2_SIZE when NumPy loads it, so they are unset for
+# this command only: the bench's dgemm and NumPy work run on this CPU's own kernels.
 bench: $(STAMP)
 	$(BIN)/python -m pip install --quiet -e '.[fast]'
-	$(BIN)/soilwater bench
+	env -u OPENBLAS_CORETYPE -u OPENBLAS_L2_SIZE $(BIN)/soilwater bench
 
 clean:
 	rm -rf $(VENV) .pytest_cache .hypothesis

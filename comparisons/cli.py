@@ -205,8 +205,8 @@ def _parser():
     p = sub.add_parser("bench", help="speed ratios against scikit-fem (writes "
                        "reports/bench.md)")
     p.add_argument("--out", default="reports/bench.md", help="Markdown table")
-    p.add_argument("--sizes", default="1000,3000,10000,30000,100000",
-                   help="comma-separated node counts (default 1e3 to 1e5)")
+    p.add_argument("--sizes", help="comma-separated node counts, e.g. 1000,3e5 (default "
+                   "comparisons.bench.SIZES)")
     p.set_defaults(func=_bench)
 
     p = sub.add_parser("report", help="regenerate every figure and table under reports/")
@@ -310,9 +310,9 @@ def _check(args):
 
 
 def _bench(args):
-    from comparisons.bench import run
+    from comparisons.bench import SIZES, parse_sizes, run
 
-    run(args.out, sizes=[int(n) for n in args.sizes.split(",")])
+    run(args.out, sizes=SIZES if args.sizes is None else parse_sizes(args.sizes))
 
 
 def _report(args):

@@ -1,0 +1,230 @@
+"""``make bench`` machinery on tiny inputs: children that die or hang, the plan of runs,
+the targets' verdicts and the growth fits (no timing is asserted)."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from comparisons import bench
+
+ROOT = Path(__file__).parents[1]
+
+
+def _killed():
+    os.kill(os.getpid(), signal.SIGKILL)
+
+
+def _raises():
+    raise RuntimeError("no convergence\nsecond line")
+
+
+def test_in_child_returns_the_value():
+    assert bench.in_child(divmod, 7, 2, timeout=30) == ((3, 1), "ok")
+
+
+@pytest.mark.parametrize("fn,args,status", [
+    (os._exit, (3,), "died (exit 3)"),
+    (_killed, (), f"died (signal {int(signal.SIGKILL)})"),
+    (_raises, (), "failed: RuntimeError: no convergence"),
+])
+def test_in_child_reports_a_child_that_gives_no_answer_at_once(fn, args, status):
+    tic = time.perf_counter()
+    assert bench.in_child(fn, *args, timeout=60) == (None, status)
+    assert time.perf_counter() - tic < 20       # not the whole timeout
+
+
+def test_in_child_stops_a_child_that_hangs():
+    tic = time.perf_counter()
+    assert bench.in_child(time.sleep, 60, timeout=0.5) == (None, "stopped at 0.5 s")
+    assert time.perf_counter() - tic < 20
+
+
+@pytest.mark.parametrize("sizes", ["1000,abc", "1000,", "1e3,2.5e3,0.5", "50", "nan", "1e400"])
+def test_bad_sizes_are_one_line_and_write_nothing(tmp_path, sizes):
+    proc = subprocess.run([sys.executable, "-m", "comparisons.cli", "bench", "--sizes", sizes,
+                           "--out", str(tmp_path / "bench.md")], cwd=ROOT,
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("soilwater: error: --sizes"), proc.stderr
+    assert not list(tmp_path.iterdir())
+
+
+def test_sizes_accept_exponents():
+    assert bench.parse_sizes("1000,3e5, 1e6") == [1000, 300_000, 1_000_000]
+
+
+def test_numpy_blas_names_the_openblas_variables_it_was_loaded_with():
+    env = {**os.environ, "OPENBLAS_CORETYPE": "Prescott"}
+    env.pop("OPENBLAS_L2_SIZE", None)
+    code = "from comparisons import bench; print(bench.numpy_blas())"
+    line = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, check=True,
+                          capture_output=True, text=True, timeout=120).stdout
+    assert "OPENBLAS_CORETYPE Prescott, OPENBLAS_L2_SIZE unset" in line
+    if "core " in line and "core unknown" not in line:      # OpenBLAS says which kernel
+        assert "Haswell" not in line and "Zen" not in line and "SkylakeX" not in line
+
+
+def test_dgemm_rates_are_positive_and_mkl_is_measured_where_pardiso_is():
+    rates = bench.dgemm(300, repeat=1)
+    assert rates["n"] == 300 and rates["numpy_gflops"] > 0
+    assert (rates["mkl_gflops"] > 0) == bench.available("pardiso")
+
+
+def test_make_bench_unsets_the_openblas_variables_before_numpy_loads():
+    recipe = (ROOT / "Makefile").read_text().split("\nbench:")[1].split("\n\n")[0]
+    line = next(line for line in recipe.splitlines() if "soilwater bench" in line)
+    assert all(f"-u {name}" in line.split("soilwater")[0]
+               for name in bench.OPENBLAS_VARIABLES)
+
+
+def test_plan_runs_only_efg_and_fem_p1p1_stab_on_cam_clay_from_large_from():
+    runs = bench.plan([1_000, bench.LARGE_FROM, 1_000_000])
+    small = [run for run in runs if run[0] == 1_000]
+    assert len(small) == len(bench.METHODS) * len(bench.MATERIALS)
+    assert {run[3] for run in small} == {bench.direct()} and {run[4] for run in small} == {
+        bench.TIME_LIMIT}
+    large = [run for run in runs if run[0] >= bench.LARGE_FROM]
+    assert [run[:3] for run in large] == [
+        (n, "cam-clay", m) for n in (bench.LARGE_FROM, 1_000_000)
+        for m in ("efg", "fem-p1p1-stab")]
+    assert {run[3] for run in large} == {"krylov"}
+    assert {run[4] for run in large} == {bench.LARGE_TIME_LIMIT}
+
+
+def test_solver_and_limit_change_at_their_sizes(monkeypatch):
+    assert bench.solver_for(bench.KRYLOV_FROM - 1) in ("pardiso", "superlu")
+    assert bench.solver_for(bench.KRYLOV_FROM) == "krylov"
+    assert bench.time_limit(100_000) == bench.TIME_LIMIT
+    assert bench.time_limit(bench.LARGE_FROM) == bench.LARGE_TIME_LIMIT
+    monkeypatch.setattr(bench, "KRYLOV_FROM", 500)
+    assert bench.solver_for(500) == "krylov"
+
+
+def test_steps_records_the_solver_per_row_and_an_unavailable_back_end(monkeypatch):
+    """Tiny sizes only: the iterative back-end is asked for from 300 nodes here."""
+    monkeypatch.setattr(bench, "KRYLOV_FROM", 300)
+    lines = []
+    table = bench.steps([200, 300], methods=("efg",), materials=("elastic",),
+                        progress=lines.append)
+    assert list(table.columns) == list(bench.COLUMNS) and len(lines) == 2
+    small, large = table.iloc[0], table.iloc[1]
+    assert small.status == "ok" and small.solver == bench.direct()
+    assert small.iterations >= 1 and small.step > 0 and small.limit_s == bench.TIME_LIMIT
+    assert small.kb_per_node == pytest.approx(small.peak_mb * 1e3 / small.nodes)
+    if small.factor_flops == small.factor_flops:             # the back-end counts them
+        assert small.factor_gflops_lb == pytest.approx(small.factor_flops / small.solve / 1e9)
+    assert large.solver == "krylov"
+    if not bench.usable("krylov"):
+        assert large.status == "krylov not available" and large.step != large.step
+        assert "krylov not available" in lines[1]
+
+
+def _rows(*rows):
+    """A table of :func:`bench.steps` from (method, nodes, step, status, solver, peak_mb)."""
+    return pd.DataFrame([
+        {"method": method, "material": "cam-clay", "nodes": nodes, "solver": solver,
+         "status": status, "step": step if status == "ok" else np.nan,
+         "peak_mb": peak if status == "ok" else np.nan,
+         "limit_s": bench.time_limit(nodes)}
+        for method, nodes, step, status, solver, peak in rows]).reindex(
+            columns=list(bench.COLUMNS))
+
+
+def test_issue17_targets_measured_where_every_run_completed():
+    sizes = (10_296, 100_010, 1_004_276)
+    efg = [("efg", n, n * 1e-4, "ok", "krylov" if n > 3e5 else "pardiso", 2000.0)
+           for n in sizes]
+    stab = [("fem-p1p1-stab", n, n * 1e-4 / r, "ok", "krylov" if n > 3e5 else "pardiso", 1.0)
+            for n, r in zip(sizes, (1.5, 3.0, 2.0))]
+    goals = bench.issue17_targets(_rows(*efg, *stab), "a CPU")
+    met = dict(zip(goals.target, goals.met))
+    assert met["EFG Cam-clay step at 1e5 nodes [s]"] == "yes"          # 10.0 s <= 16.05
+    assert met["EFG Cam-clay peak memory at 1e5 nodes [GB]"] == "yes"  # 2.0 GB
+    assert met["EFG Cam-clay step at 1e6 nodes [s]"] == "yes"
+    growth = goals[goals.target.str.contains("growth")].iloc[0]
+    assert growth.measured == pytest.approx(1.0) and growth.met == "yes"
+    assert "pardiso, krylov" in growth["where"]
+    ratios = goals[goals.target.str.contains("fem-p1p1-stab")]
+    assert ratios.measured.tolist() == pytest.approx([1.5, 3.0, 2.0])
+    assert ratios.met.tolist() == ["yes", "**no**", "yes"]
+    assert "the CPU may differ" in goals["where"].iloc[0] and "a CPU" in goals["where"].iloc[0]
+
+
+def test_issue17_targets_never_say_yes_for_a_run_that_did_not_complete():
+    table = _rows(("efg", 10_296, 1.0, "ok", "pardiso", 500.0),
+                  ("efg", 100_010, 0, "stopped at 240 s", "pardiso", 0),
+                  ("efg", 1_004_276, 0, "died (signal 9)", "krylov", 0),
+                  ("fem-p1p1-stab", 10_296, 0, "stopped at 240 s", "pardiso", 0),
+                  ("fem-p1p1-stab", 100_010, 5.0, "ok", "pardiso", 0),
+                  ("fem-p1p1-stab", 1_004_276, 0, "krylov not available", "krylov", 0))
+    goals = bench.issue17_targets(table)
+    assert (goals.met == "not measured").all(), goals
+    assert goals.measured.isna().all()
+    where = dict(zip(goals.target + goals["where"].str.split(",").str[0], goals["where"]))
+    assert "stopped at 240 s" in where["EFG Cam-clay step at 1e5 nodes [s]100010 nodes"]
+    assert "died (signal 9)" in where["EFG Cam-clay step at 1e6 nodes [s]1004276 nodes"]
+    ratios = goals[goals.target.str.contains("fem-p1p1-stab")]["where"].tolist()
+    assert "ratio < 0.00417" in ratios[0]                 # 1 s against more than 240 s
+    assert "ratio > 48" in ratios[1]                      # more than 240 s against 5 s
+    assert "krylov not available" in ratios[2]
+    assert "only" in goals[goals.target.str.contains("growth")]["where"].iloc[0] or \
+        "fewer than two" in goals[goals.target.str.contains("growth")]["where"].iloc[0]
+
+
+def test_issue17_growth_needs_both_ends_and_a_missing_size_is_not_measured():
+    table = _rows(("efg", 10_296, 1.0, "ok", "pardiso", 500.0),
+                  ("efg", 100_010, 10.0, "ok", "pardiso", 500.0),
+                  ("efg", 300_675, 30.0, "ok", "krylov", 500.0))
+    goals = bench.issue17_targets(table).set_index("target")
+    growth = goals.loc["EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes"]
+    assert growth.met == "not measured" and "only (fit 1.0" in growth["where"]
+    assert goals.loc["EFG Cam-clay step at 1e6 nodes [s]"]["where"] == "no run at 1e6 nodes"
+    assert goals.loc["EFG Cam-clay step at 1e6 nodes [s]"].met == "not measured"
+
+
+def test_exponent_fits_only_the_range_asked_for():
+    nodes, seconds = [1_036, 10_296, 100_010, 1_004_276], [1.0, 10.0, 100.0, 1e5]
+    assert bench.exponent(nodes, seconds, within=(1e3, 1e5)) == pytest.approx(
+        1.0, abs=0.01)
+    assert bench.exponent(nodes, seconds) > 1.5
+    assert bench.exponent(nodes, [1.0, np.nan, np.nan, 5.0], within=(1e4, 1e6)) != \
+        bench.exponent(nodes, [1.0, np.nan, np.nan, 5.0], within=(1e4, 1e6))  # NaN: 1 point
+
+
+def test_issue7_targets_survive_runs_that_did_not_complete():
+    table = _rows(("efg", 10_296, 1.0, "stopped at 240 s", "pardiso", 0),
+                  ("fem-p1p1", 10_296, 2.0, "ok", "pardiso", 0))
+    goals = bench.targets(table, pd.DataFrame(), bench.exponents(table))
+    assert goals.met.tolist() == ["not measured"]
+
+
+def test_run_writes_both_target_tables_the_rates_and_the_figure(tmp_path, monkeypatch):
+    monkeypatch.setattr(bench, "DGEMM_N", 200)
+    monkeypatch.setattr(bench, "SHAPES_UP_TO", 0)            # no shape functions
+    table = bench.run(str(tmp_path / "bench.md"), sizes=[200])
+    assert (table.status == "ok").all() and set(table.method) == set(bench.METHODS)
+    text = (tmp_path / "bench.md").read_text()
+    for heading in ("## Targets (issue 17)", "## Targets (issue 7)",
+                    "## Factorisation rate against dgemm", "## Counts, memory and rates"):
+        assert heading in text
+    assert "dgemm of two 200 x 200 float64 matrices" in text
+    assert (tmp_path / "figures" / "bench.png").stat().st_size > 0
+    assert list(pd.read_csv(tmp_path / "tables" / "bench.csv").columns) == list(bench.COLUMNS)
+
+
+def test_figure_draws_krylov_and_stopped_runs(tmp_path):
+    table = _rows(("efg", 10_296, 1.0, "ok", "pardiso", 500.0),
+                  ("efg", 300_675, 30.0, "ok", "krylov", 500.0),
+                  ("fem-p1p1-stab", 10_296, 0.5, "ok", "pardiso", 0),
+                  ("fem-p1p1-stab", 300_675, 0, "stopped at 900 s", "krylov", 0),
+                  ("efg", 1_004_276, 0, "died (signal 9)", "krylov", 0))
+    bench.figure(table, tmp_path / "bench.png")
+    assert (tmp_path / "bench.png").stat().st_size > 0
