@@ -18,7 +18,9 @@ Three measurements, all on this machine in one command (never timed tests):
    took about 10 minutes before fem-p1p1-stab was added; the four large runs are bounded
    by 4 x 900 s. The linear solver is chosen by size (:func:`solver_for`): the direct
    one, PARDISO where ``pypardiso`` is installed, else SuperLU, below 3 x 10^5 nodes
-   (:data:`KRYLOV_FROM`), and ``soil.linear.linear_solver("krylov")`` from there. The
+   (:data:`KRYLOV_FROM`), and ``soil.linear.linear_solver("krylov")`` from there, where
+   EFG runs with Nitsche's conditions and the perturbation stabilisation, as the Krylov
+   back-end needs (:func:`compression`; the ``efg`` column says which). The
    solvers' own phase timers (:data:`soil.coupling.TIMERS`) give shape functions (FEM:
    basis construction), background cells (FEM: moving the mesh), assembly of the
    tangent, linear solve (analysis, factorisations and back-substitutions), constitutive
@@ -118,7 +120,7 @@ def parse_sizes(text):
     return sizes
 
 
-def compression(nodes, material="cam-clay"):
+def compression(nodes, material="cam-clay", krylov=False):
     """The benchmark case: unconfined compression on a grid of about ``nodes`` nodes.
 
     Parameters
@@ -127,6 +129,11 @@ def compression(nodes, material="cam-clay"):
         Wanted node count; the grid is (3k + 1) x (4k + 1) with square spacing.
     material : {"cam-clay", "elastic"}
         The case's Cam-clay (Table 1) or the linear elastic :data:`ELASTIC`.
+    krylov : bool
+        EFG as the Krylov back-end needs it: Nitsche's essential conditions (a penalty's
+        diagonal spans 1e6, so a small residual says nothing of the error) and the
+        perturbation stabilisation (the case is undrained: without it the pressure Schur
+        complement of equal-order MLS is near singular and FGMRES stalls).
 
     Examples
     --------
@@ -136,7 +143,9 @@ def compression(nodes, material="cam-clay"):
     k = max(1, round(np.sqrt(nodes / 12)))
     case = load_case("unconfined-compression", [
         f"discretisation.nx={3 * k + 1}", f"discretisation.ny={4 * k + 1}",
-        "discretisation.layout=grid", "time.steps=1", "time.end=0.2"])
+        "discretisation.layout=grid", "time.steps=1", "time.end=0.2",
+        *(['efg.essential="nitsche"', 'efg.stabilisation="perturbation"'] if krylov
+          else [])])
     if material == "elastic":
         case = dataclasses.replace(case, material_spec=ELASTIC)
     return case
@@ -197,8 +206,8 @@ def plan(sizes=SIZES, methods=METHODS, materials=MATERIALS):
 
 
 #: Columns of a row of :func:`steps`, in order.
-COLUMNS = ("method", "material", "nodes", "solver", "status", "dofs", "iterations",
-           "linear_iterations", "factorisations", "symmetric_factorisations",
+COLUMNS = ("method", "material", "nodes", "solver", "efg", "status", "dofs",
+           "iterations", "linear_iterations", "factorisations", "symmetric_factorisations",
            "perturbed_pivots", "factor_flops", *PHASES, "factor_gflops_lb", "peak_mb",
            "kb_per_node", "wall_s", "limit_s")
 
@@ -220,16 +229,18 @@ def one_step(method, nodes, material, solver=None):
     import efg.solver
     import fem_reference.solver
 
-    case = compression(nodes, material)
     with linear_solver(solver):
         name = backend() if solver is None else solver
+        case = compression(nodes, material, krylov=name == "krylov")
         tic = time.perf_counter()
         result = (efg.solver.solve(case, progress=False) if method == "efg"
                   else fem_reference.solver.solve(case, method, progress=False))
         wall = time.perf_counter() - tic
     summary = result.summary
     row = {"method": method, "material": material, "nodes": len(case.nodes()),
-           "solver": name, "status": "ok", "dofs": summary["dofs"],
+           "solver": name, "efg": (f"{case.efg.essential}, {case.efg.stabilisation}"
+                                            if method == "efg" else "-"),
+           "status": "ok", "dofs": summary["dofs"],
            "iterations": int(result.history.iterations.sum()),
            "linear_iterations": float(summary.get("linear_iterations", np.nan)),
            "factorisations": summary.get("factorisations", np.nan),
