@@ -267,7 +267,7 @@ def newton(system, stats):
             with timed(stats["timings"], "solve_s"):
                 lu = factorise(K, system.layout, symmetric=SYMMETRIC_FIRST and lu is None)
             _count(stats, lu)
-        eta = forcing(residual, previous, eta)
+        eta = forcing(residual, previous, eta, TOLERANCE)
         previous, before = residual, lu.iterations
         with timed(stats["timings"], "solve_s"):
             dx = lu.solve(-R, rtol=eta)

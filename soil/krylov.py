@@ -36,8 +36,6 @@ unit thickness), so the relative residual FGMRES stops on weighs equilibrium and
 as the Newton tolerance does.
 """
 
-from dataclasses import dataclass
-
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
@@ -56,57 +54,13 @@ NO_PROGRESS = 0.5
 MAX_COARSE = 500
 
 
-@dataclass(frozen=True)
-class Layout:
-    """What the unknowns of a Newton system are, for the linear solvers.
-
-    Attributes
-    ----------
-    groups : ndarray of int, shape (n,), or None
-        The node (location) of each unknown, -1 for a rigid plate or a multiplier:
-        PARDISO's node-blocked order (:func:`soil.linear.factorise`).
-    fields : ndarray of int, shape (n,), or None
-        0 and 1: displacement x and y [m]; 2: pore pressure [kPa]; -1: anything else.
-    locations : ndarray, shape (n, 2), or None
-        Where each unknown lives [m]: the rigid-body modes of the displacement AMG.
-    scales : ndarray, shape (n,), or None
-        The residual scale of each row: force or volume per unit thickness.
-    mass : ndarray, shape (n,), or None
-        Lumped pressure mass ``int N_i dV`` [m2 per unit thickness] on pressure rows.
-    modulus : float
-        P-wave modulus ``K + 4G/3`` of the initial state [kPa].
-    """
-
-    groups: np.ndarray = None
-    fields: np.ndarray = None
-    locations: np.ndarray = None
-    scales: np.ndarray = None
-    mass: np.ndarray = None
-    modulus: float = 1.0
-
-    @property
-    def complete(self):
-        """True if the layout names enough for the Krylov back-end."""
-        return all(v is not None for v in (self.fields, self.locations, self.scales,
-                                           self.mass))
-
-
-def available():
-    """True if pyamg imports."""
-    try:
-        import pyamg  # noqa: F401
-    except ImportError:
-        return False
-    return True
-
-
 class Krylov:
     """The preconditioner of one tangent, and FGMRES solves with it.
 
     Parameters
     ----------
     K : scipy.sparse matrix, shape (n, n)
-    layout : Layout
+    layout : soil.linear.Layout
 
     Attributes
     ----------

@@ -16,9 +16,10 @@ Two back-ends, one interface (:func:`factorise` returns an object with ``solve(b
   for (``make bench`` does from :data:`comparisons.bench.KRYLOV_FROM` nodes).
 
 ``pardiso`` is used when ``pypardiso`` imports, unless the environment variable
-``SOILWATER_LINEAR_SOLVER`` (``superlu``, ``pardiso`` or ``krylov``) asks otherwise. Both solvers reuse a factorisation
-while it contracts the Newton residual at least :data:`CONTRACTION`-fold per iteration
-(modified Newton), and refactorise the current tangent otherwise.
+``SOILWATER_LINEAR_SOLVER`` (``superlu``, ``pardiso`` or ``krylov``) asks otherwise. All
+three reuse a factorisation (a preconditioner) while it contracts the Newton residual at
+least :data:`CONTRACTION`-fold per iteration (modified Newton), and refactorise the
+current tangent otherwise.
 
 ``factorise(K, layout, symmetric=True)`` asks for the cheaper symmetric factorisation of
 ``sym(K) = (K + K^T) / 2``, for a tangent that is nearly symmetric: PARDISO factorises
@@ -33,6 +34,7 @@ tangents). SuperLU has no symmetric mode and factorises ``K``.
 import os
 import weakref
 from contextlib import contextmanager
+from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
@@ -40,10 +42,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from soil.errors import ConvergenceError, InputError
-from soil.krylov import Krylov, Layout
-
-__all__ = ["Layout", "available", "backend", "factorise", "forcing", "identity",
-           "linear_solver", "must_refactorise"]
+from soil.krylov import Krylov
 
 #: A factorisation is kept while each iteration divides the residual by at least 1/this.
 CONTRACTION = 0.1
@@ -72,17 +71,51 @@ SYMMETRIC = {1: 1, 2: 2, 10: 8, 11: 1, 13: 1, 21: 1}
 NODE_ORDERING = {1: 1, 2: 2, 5: 2, 13: 0}
 
 
+@dataclass(frozen=True)
+class Layout:
+    """What the unknowns of a Newton system are, for the linear solvers.
+
+    Attributes
+    ----------
+    groups : ndarray of int, shape (n,), or None
+        The node (location) of each unknown, -1 for a rigid plate or a multiplier:
+        PARDISO's node-blocked order (:func:`soil.linear.factorise`).
+    fields : ndarray of int, shape (n,), or None
+        0 and 1: displacement x and y [m]; 2: pore pressure [kPa]; -1: anything else.
+    locations : ndarray, shape (n, 2), or None
+        Where each unknown lives [m]: the rigid-body modes of the displacement AMG.
+    scales : ndarray, shape (n,), or None
+        The residual scale of each row: force or volume per unit thickness.
+    mass : ndarray, shape (n,), or None
+        Lumped pressure mass ``int N_i dV`` [m2 per unit thickness] on pressure rows.
+    modulus : float
+        P-wave modulus ``K + 4G/3`` of the initial state [kPa].
+    """
+
+    groups: np.ndarray = None
+    fields: np.ndarray = None
+    locations: np.ndarray = None
+    scales: np.ndarray = None
+    mass: np.ndarray = None
+    modulus: float = 1.0
+
+    @property
+    def complete(self):
+        """True if the layout names enough for the Krylov back-end."""
+        return all(v is not None for v in (self.fields, self.locations, self.scales,
+                                           self.mass))
+
+
 def available(name):
     """True if the back-end ``name`` (``"pardiso"``, ``"superlu"``, ``"krylov"``) can be
     used here."""
     if name == "superlu":
         return True
-    if name == "krylov":
-        from soil.krylov import available as amg
-
-        return amg()
     try:
-        import pypardiso  # noqa: F401
+        if name == "krylov":
+            import pyamg  # noqa: F401
+        else:
+            import pypardiso  # noqa: F401
     except ImportError:
         return False
     return True
@@ -127,8 +160,9 @@ def _version(distribution):
 
 @contextmanager
 def linear_solver(name):
-    """Use the back-end ``name`` (``"pardiso"``, ``"superlu"``, ``"krylov"``; None: leave the choice to
-    :func:`backend`) inside the ``with`` block, through ``SOILWATER_LINEAR_SOLVER``."""
+    """Use the back-end ``name`` (``"pardiso"``, ``"superlu"``, ``"krylov"``; None: leave
+    the choice to :func:`backend`) inside the ``with`` block, through
+    ``SOILWATER_LINEAR_SOLVER``."""
     if name is None:
         yield
         return
@@ -149,11 +183,11 @@ def must_refactorise(lu, residual, previous):
     return lu is None or residual > CONTRACTION * previous
 
 
-def forcing(residual, previous, last):
+def forcing(residual, previous, last, tolerance):
     """The relative residual an inexact-Newton solve stops at (Eisenstat and Walker 1996,
     choice 2 with their safeguard): ``0.9 (r_k / r_k-1)^2``, at least ``0.9 eta_k-1^2``
     when that exceeds 0.1, at most :data:`FORCING_MAX`, and no less than what takes the
-    scaled residual to a tenth of the Newton tolerance.
+    scaled residual to a tenth of the Newton ``tolerance``.
 
     Parameters
     ----------
@@ -161,20 +195,20 @@ def forcing(residual, previous, last):
         The scaled Newton residual now and at the last iteration (``inf`` at the first).
     last : float
         The forcing of the last iteration (``FORCING_MAX`` at the first).
+    tolerance : float
+        The Newton tolerance on the scaled residual.
 
     Examples
     --------
-    >>> forcing(1.0, float("inf"), FORCING_MAX)
+    >>> forcing(1.0, float("inf"), FORCING_MAX, 1e-8)
     0.01
-    >>> round(forcing(1e-2, 1.0, 0.01), 12)
+    >>> round(forcing(1e-2, 1.0, 0.01, 1e-8), 12)
     9e-05
     """
-    from soil.coupling import TOLERANCE
-
     eta = 0.9 * (residual / previous) ** 2 if np.isfinite(previous) else last
     if 0.9 * last**2 > 0.1:
         eta = max(eta, 0.9 * last**2)
-    return float(min(max(eta, 0.1 * TOLERANCE / residual), FORCING_MAX))
+    return float(min(max(eta, 0.1 * tolerance / residual), FORCING_MAX))
 
 
 def factorise(K, layout=None, symmetric=False):
