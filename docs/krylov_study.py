@@ -1,18 +1,35 @@
-"""The measured numbers of the Krylov back-end against PARDISO, README "Speed":
-python docs/krylov_study.py [nodes ...] (default 1e4 3e4; about 12 minutes on 2 cores).
+"""The measured numbers of the Krylov back-end against PARDISO, README "Speed".
 
-One step of ``make bench``'s case (:func:`comparisons.bench.compression` with
+``python docs/krylov_study.py [nodes ...]`` (default 1e4 3e4; about 12 minutes on 2
+cores): one step of ``make bench``'s case (:func:`comparisons.bench.compression` with
 ``krylov=True``: EFG with Nitsche's conditions and the perturbation stabilisation, which
 the Krylov back-end needs) on both back-ends, each in its own forked process, stopped
 after 400 s. Prints the step time, Newton and FGMRES iterations, solve time and peak
 memory.
+
+``python docs/krylov_study.py --runs`` (about 5 minutes): whole runs of the built-in cases
+on both back-ends; prints Newton, FGMRES and cut-back counts, and the largest difference
+of p, q and the settlement relative to their range, or the failure.
 """
 
+import dataclasses
 import sys
+import time
+
+import numpy as np
 
 from comparisons.bench import compression, in_child, one_step
+from soil.errors import ConvergenceError
+from soil.linear import linear_solver
+from soil.problems import load_case
 
 LIMIT = 400.0
+#: (case, method, efg.essential) of ``--runs``.
+RUNS = (("unconfined-compression", "efg", "nitsche"),
+        ("unconfined-compression", "efg", "penalty"),
+        ("unconfined-compression", "fem-th", None),
+        ("unconfined-compression", "fem-p1p1-stab", None),
+        ("terzaghi", "efg", "nitsche"))
 
 
 def stabilised(nodes, material="cam-clay", krylov=False):
@@ -20,7 +37,8 @@ def stabilised(nodes, material="cam-clay", krylov=False):
     return compression(nodes, material, krylov=True)
 
 
-def main(sizes):
+def steps(sizes):
+    """One step per size and back-end."""
     import comparisons.bench
 
     comparisons.bench.compression = stabilised
@@ -33,5 +51,41 @@ def main(sizes):
                   {k: round(row[k], 2) for k in keys} if row else "", flush=True)
 
 
+def runs():
+    """Whole runs of :data:`RUNS` on PARDISO and on the Krylov back-end."""
+    import efg.solver
+    import fem_reference.solver
+
+    for name, method, essential in RUNS:
+        case = load_case(name)
+        if essential:
+            case = dataclasses.replace(case, efg=dataclasses.replace(case.efg,
+                                                                     essential=essential))
+        histories = {}
+        for solver in ("pardiso", "krylov"):
+            with linear_solver(solver):
+                tic = time.perf_counter()
+                try:
+                    result = (efg.solver.solve(case, progress=False) if method == "efg"
+                              else fem_reference.solver.solve(case, method, progress=False))
+                except ConvergenceError as err:
+                    print(f"{name} {method} {essential} {solver}: failed: {err}", flush=True)
+                    continue
+                s = result.summary
+                histories[solver] = result.history
+                print(f"{name} {method} {essential} {solver}: "
+                      f"{time.perf_counter() - tic:.1f} s, Newton {s['newton_iterations']}, "
+                      f"FGMRES {s['linear_iterations']}, cut-backs {s['cutbacks']}",
+                      flush=True)
+        if len(histories) == 2:
+            a, b = histories["pardiso"], histories["krylov"]
+            print("  agreement", {c: float(np.abs(a[c] - b[c]).max()
+                                           / max(np.abs(a[c]).max(), 1e-30))
+                                  for c in ("p", "q", "settlement")}, flush=True)
+
+
 if __name__ == "__main__":
-    main([int(float(n)) for n in sys.argv[1:]] or [10_000, 30_000])
+    if sys.argv[1:] == ["--runs"]:
+        runs()
+    else:
+        steps([int(float(n)) for n in sys.argv[1:]] or [10_000, 30_000])
