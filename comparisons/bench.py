@@ -11,8 +11,8 @@ Three measurements, all on this machine in one command (never timed tests):
 2. **One coupled step** of the unconfined-compression geometry (grid layout, 3 x 4 m, one
    step of 0.2 % axial strain) at about 10^3, 3 x 10^3, ..., 10^6 nodes (:data:`SIZES`)
    for ``efg``, ``fem-p1p1``, ``fem-th`` and ``fem-p1p1-stab`` on the same vertices, with
-   the Cam-clay skeleton of the case and with a linear elastic one. The rule that keeps
-   the whole run within about 60 to 75 minutes on 2 cores: from 3 x 10^5 nodes
+   the Cam-clay skeleton of the case and with a linear elastic one. The rule that bounds
+   the whole run at about 60 to 75 minutes on 2 cores (an estimate from the parts below): from 3 x 10^5 nodes
    (:data:`LARGE_FROM`) only ``efg`` and ``fem-p1p1-stab`` with Cam-clay run, and a run
    is stopped after 900 s there, 240 s below (:func:`time_limit`). The sizes up to 10^5
    took about 10 minutes before fem-p1p1-stab was added; the four large runs are bounded
