@@ -196,10 +196,12 @@ def newton(system, stats):
     ``sym(K)^-1 (K - K^T) / 2``, those of ``K`` by the change of the tangent over the
     step. SuperLU has no symmetric mode: every factorisation is of ``K``.
 
-    With the Krylov back-end a "factorisation" is a preconditioner, kept by the same rule,
-    and each correction is solved inexactly, to the relative residual of
-    :func:`soil.linear.forcing` (Eisenstat-Walker): loosely far from the solution,
-    tightly near it.
+    With the Krylov back-end a "factorisation" is a preconditioner, and Newton is
+    Newton: every iteration assembles the current tangent and hands it to the
+    preconditioner (``adopt``), which is rebuilt only when it has gone stale
+    (:meth:`soil.krylov.Krylov.adopt`). Each correction is solved inexactly, to the
+    relative residual of :func:`soil.linear.forcing` (Eisenstat-Walker): loosely far from
+    the solution, tightly near it.
 
     Parameters
     ----------
@@ -261,12 +263,14 @@ def newton(system, stats):
         if iteration == MAX_ITERATIONS:
             raise ConvergenceError(f"Newton residual {residual:.2e} after {iteration} "
                                    "iterations")
-        if must_refactorise(lu, residual, previous):
+        if must_refactorise(lu, residual, previous) or lu.current:
             with timed(stats["timings"], "assembly_s"):
                 K = system.tangent()
-            with timed(stats["timings"], "solve_s"):
-                lu = factorise(K, system.layout, symmetric=SYMMETRIC_FIRST and lu is None)
-            _count(stats, lu)
+            if lu is None or not lu.adopt(K):
+                with timed(stats["timings"], "solve_s"):
+                    lu = factorise(K, system.layout,
+                                   symmetric=SYMMETRIC_FIRST and lu is None)
+                _count(stats, lu)
         eta = forcing(residual, previous, eta, TOLERANCE)
         previous, before = residual, lu.iterations
         with timed(stats["timings"], "solve_s"):

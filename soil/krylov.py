@@ -68,9 +68,13 @@ class Krylov:
         FGMRES iterations of all solves so far.
     symmetric, perturbed_pivots, flops
         False, 0 and 0.0: the counts :func:`soil.coupling.newton` keeps of a factorisation.
+    current : bool
+        True: solves are as cheap with the current tangent as with the first, so Newton
+        hands it over at every iteration (:meth:`adopt`) and converges as Newton, not
+        as modified Newton.
     """
 
-    symmetric, perturbed_pivots, flops = False, 0, 0.0
+    symmetric, perturbed_pivots, flops, current = False, 0, 0.0, True
 
     def __init__(self, K, layout):
         if layout is None or not layout.complete:
@@ -82,18 +86,34 @@ class Krylov:
         p, other = np.flatnonzero(fields == 2), np.flatnonzero(fields < 0)
         self.order, self.sizes = np.concatenate([u, p, other]), (len(u), len(p))
         self.row = 1.0 / layout.scales[self.order]
-        self.K = sp.csr_matrix(sp.diags(self.row) @ sp.csr_matrix(K)[self.order][:, self.order])
+        self.iterations = 0
+        scaled = sp.csr_matrix(sp.diags(self.row) @ sp.csr_matrix(K)[self.order][:, self.order])
         nu, nm = len(u), len(u) + len(p)
-        A, B = self.K[:nu, :nu], self.K[:nu, nu:nm]
-        C, D = self.K[nu:nm, :nu], self.K[nu:nm, nu:nm]
-        self.B, self.iterations = B, 0
+        A, B = scaled[:nu, :nu], scaled[:nu, nu:nm]
+        C, D = scaled[nu:nm, :nu], scaled[nu:nm, nu:nm]
+        self.B = B
         self.amg_u = _amg_u(A, layout.locations[u], fields[u], _pairs(layout, u))
         self.amg_p, self.sign_p = _amg_schur(
             A, B, C, D, self.row[nu:nm] * layout.mass[p] / layout.modulus)
-        self.F = self.K[nm:, :nm]
+        self.F = scaled[nm:, :nm]
         if len(other):
-            self.Z = np.column_stack([self._main(e) for e in self.K[:nm, nm:].toarray().T])
-            self.schur = np.linalg.inv(self.K[nm:, nm:].toarray() - self.F @ self.Z)
+            self.Z = np.column_stack([self._main(e) for e in scaled[:nm, nm:].toarray().T])
+            self.schur = np.linalg.inv(scaled[nm:, nm:].toarray() - self.F @ self.Z)
+        self.adopt(K)
+
+    def adopt(self, K):
+        """Solve with the tangent ``K`` from now on, keeping the preconditioner (built
+        from the first tangent of the Newton step: within a step the tangent changes
+        little, and a preconditioner rebuilt at every iteration measured no fewer FGMRES
+        iterations per decade of residual). Returns True."""
+        self.K = sp.csr_matrix(K)
+        return True
+
+    def _matvec(self, x):
+        """The scaled, reordered tangent times ``x``."""
+        y = np.empty_like(x)
+        y[self.order] = x
+        return self.row * (self.K @ y)[self.order]
 
     def _main(self, r):
         """The block-triangular preconditioner on displacement and pressure rows."""
@@ -122,7 +142,8 @@ class Krylov:
         from pyamg.krylov import fgmres
 
         residuals = []
-        x, _ = fgmres(self.K, self.row * np.asarray(b, float)[self.order],
+        x, _ = fgmres(spla.LinearOperator(self.K.shape, self._matvec),
+                      self.row * np.asarray(b, float)[self.order],
                       M=spla.LinearOperator(self.K.shape, self._apply), tol=rtol,
                       restart=RESTART, maxiter=-(-MAX_ITERATIONS // RESTART),
                       residuals=residuals)
