@@ -267,7 +267,9 @@ def in_child(fn, *args, timeout=None):
     Returns
     -------
     value : object or None
-        ``fn(*args)``, or None when it did not come back.
+        ``fn(*args)``; for a child stopped after ``timeout``, ``{"peak_mb": M}``, its
+        peak resident memory until then [MB = 10^6 bytes] (Linux ``/proc``; None where
+        that cannot be read); None when it did not come back otherwise.
     status : str
         ``"ok"``; ``"stopped at T s"`` (killed after ``timeout``); ``"died (signal N)"``
         (killed by a signal: SIGKILL from the kernel's out-of-memory killer, a crash in
@@ -304,7 +306,7 @@ def in_child(fn, *args, timeout=None):
             except (EOFError, OSError):        # died while sending, or before
                 pass
         elif not ready:
-            return None, f"stopped at {timeout:g} s"
+            return {"peak_mb": _peak_mb(child.pid)}, f"stopped at {timeout:g} s"
         child.join()
         code = child.exitcode
         return None, (f"died (signal {-code})" if code < 0 else f"died (exit {code})")
@@ -312,6 +314,17 @@ def in_child(fn, *args, timeout=None):
         child.kill()
         child.join()
         reader.close()
+
+
+def _peak_mb(pid):
+    """Peak resident memory of the live process ``pid`` [MB] (``VmHWM`` in Linux's
+    ``/proc/pid/status``), or None where it cannot be read."""
+    try:
+        with open(f"/proc/{pid}/status") as fh:
+            kb = next(line.split()[1] for line in fh if line.startswith("VmHWM:"))
+    except (OSError, StopIteration):
+        return None
+    return float(kb) * 1024 / 1e6
 
 
 def steps(sizes=SIZES, methods=METHODS, materials=MATERIALS, limit=None, progress=print):
@@ -339,10 +352,13 @@ def steps(sizes=SIZES, methods=METHODS, materials=MATERIALS, limit=None, progres
                                    timeout=seconds)
         else:
             row, status = None, f"{solver} not available"
-        if row is None:
+        if status != "ok":
             row = {"method": method, "material": material,
                    "nodes": len(compression(nodes).nodes()), "solver": solver,
-                   "status": status}
+                   "status": status, **(row or {})}
+            if row.get("peak_mb") is not None:
+                row["kb_per_node"] = row["peak_mb"] * 1e3 / row["nodes"]
+                status += f", peak {row['peak_mb']:.0f} MB"
             progress(f"{method:13s} {material:8s} {row['nodes']:7d} nodes, {solver:7s}: "
                      f"{status}")
         else:
@@ -645,9 +661,10 @@ def issue17_targets(table, machine_name="this machine"):
             size = f"{nodes:.0e}".replace("e+0", "e")
             rows.append((what, f"no run at {size} nodes", np.nan, limit))
             return
-        done = row.status == "ok"
+        done, peak = row.status == "ok", row.get("peak_mb", np.nan)
+        until = f" (peak {peak / 1e3:.2f} GB until then)" if peak == peak else ""
         rows.append((what, f"{row.nodes} nodes, {row.solver}"
-                     + ("" if done else f", {row.status}") + note,
+                     + ("" if done else f", {row.status}{until}") + note,
                      row[column] * scale if done else np.nan, limit))
 
     at_size(100_000, "step", 1.0, "EFG Cam-clay step at 1e5 nodes [s]", 0.5 * BASELINE_STEP,

@@ -48,7 +48,8 @@ def steps(sizes):
                                    timeout=LIMIT)
             keys = ("step", "iterations", "linear_iterations", "solve", "peak_mb")
             print(f"{nodes:8d} {solver:8s} {status}",
-                  {k: round(row[k], 2) for k in keys} if row else "", flush=True)
+                  {k: round(row[k], 2) for k in keys} if status == "ok" else row,
+                  flush=True)
 
 
 def runs():
