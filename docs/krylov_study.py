@@ -10,6 +10,13 @@ memory.
 ``python docs/krylov_study.py --runs`` (about 5 minutes): whole runs of the built-in cases
 on both back-ends; prints Newton, FGMRES and cut-back counts, and the largest difference
 of p, q and the settlement relative to their range, or the failure.
+
+``python docs/krylov_study.py --symmetric [nodes ...]`` (default 1e4 1e5; about 5
+minutes): the first tangent of the bench case's step (penalty EFG, as ``make bench`` runs
+it on PARDISO) factorised as LU of ``K`` and as PARDISO's LDL^T of ``sym(K)``; prints
+their times and flops, one back-solve of each, and FGMRES on ``K`` preconditioned by the
+LDL^T (rows scaled as Newton scales them) to 1e-4, 1e-8 and 1e-10: iterations, time and
+the largest difference from the LU solution relative to its largest entry.
 """
 
 import dataclasses
@@ -85,8 +92,70 @@ def runs():
                                   for c in ("p", "q", "settlement")}, flush=True)
 
 
+class _Captured(Exception):
+    """The first tangent of a step, and its layout."""
+
+
+def first_tangent(nodes):
+    """The first Newton tangent of one bench step (penalty EFG, Cam-clay) and its
+    layout."""
+    import efg.solver
+    import soil.coupling
+
+    def capture(K, layout=None, symmetric=False):
+        raise _Captured(K, layout)
+
+    original, soil.coupling.factorise = soil.coupling.factorise, capture
+    try:
+        with linear_solver("pardiso"):
+            efg.solver.solve(compression(nodes), progress=False)
+    except _Captured as captured:
+        return captured.args
+    finally:
+        soil.coupling.factorise = original
+    raise RuntimeError("the step did not factorise")
+
+
+def symmetric(sizes):
+    """LU of K against LDL^T of sym(K) as FGMRES's preconditioner, per size."""
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+    from pyamg.krylov import fgmres
+
+    from soil.linear import _Pardiso
+
+    for nodes in sizes:
+        K, layout = first_tangent(nodes)
+        K = sp.csr_matrix(K)
+        print(f"{nodes} nodes, {K.shape[0]} unknowns, ||K - K^T|| / ||K|| = "
+              f"{spla.norm(K - K.T) / spla.norm(K):.1e}", flush=True)
+        b = np.random.default_rng(0).standard_normal(K.shape[0]) * layout.scales
+        solves = {}
+        for name, sym in (("LU of K", False), ("LDL^T of sym(K)", True)):
+            tic = time.perf_counter()
+            solves[name] = _Pardiso(K, layout.groups, sym)
+            built = time.perf_counter() - tic
+            tic = time.perf_counter()
+            solves[name].solve(b)
+            print(f"  {name}: factorisation {built:.1f} s, {solves[name].flops:.2e} flops, "
+                  f"{solves[name].perturbed_pivots} perturbed pivots; back-solve "
+                  f"{time.perf_counter() - tic:.2f} s", flush=True)
+        exact, ldlt, row = solves["LU of K"].solve(b), solves["LDL^T of sym(K)"], 1 / layout.scales
+        A = spla.LinearOperator(K.shape, lambda x: row * (K @ x))
+        M = spla.LinearOperator(K.shape, lambda r: ldlt.solve(r / row))
+        for rtol in (1e-4, 1e-8, 1e-10):
+            residuals, tic = [], time.perf_counter()
+            x, _ = fgmres(A, row * b, M=M, tol=rtol, restart=60, maxiter=1,
+                          residuals=residuals)
+            print(f"  FGMRES to {rtol:.0e}: {len(residuals) - 1} iterations, "
+                  f"{time.perf_counter() - tic:.2f} s, difference from LU "
+                  f"{np.abs(x - exact).max() / np.abs(exact).max():.1e}", flush=True)
+
+
 if __name__ == "__main__":
     if sys.argv[1:] == ["--runs"]:
         runs()
+    elif sys.argv[1:2] == ["--symmetric"]:
+        symmetric([int(float(n)) for n in sys.argv[2:]] or [10_000, 100_000])
     else:
         steps([int(float(n)) for n in sys.argv[1:]] or [10_000, 30_000])

@@ -16,10 +16,11 @@ Two back-ends, one interface (:func:`factorise` returns an object with ``solve(b
   for (``make bench`` does from :data:`comparisons.bench.KRYLOV_FROM` nodes).
 
 ``pardiso`` is used when ``pypardiso`` imports, unless the environment variable
-``SOILWATER_LINEAR_SOLVER`` (``superlu``, ``pardiso`` or ``krylov``) asks otherwise. All
-three reuse a factorisation (a preconditioner) while it contracts the Newton residual at
-least :data:`CONTRACTION`-fold per iteration (modified Newton), and refactorise the
-current tangent otherwise.
+``SOILWATER_LINEAR_SOLVER`` (``superlu``, ``pardiso`` or ``krylov``) asks otherwise. The
+direct ones reuse a factorisation while it contracts the Newton residual at least
+:data:`CONTRACTION`-fold per iteration (modified Newton), and refactorise the current
+tangent otherwise; the Krylov one solves with the current tangent at every iteration
+through the preconditioner of the step's first (Newton).
 
 ``factorise(K, layout, symmetric=True)`` asks for the cheaper symmetric factorisation of
 ``sym(K) = (K + K^T) / 2``, for a tangent that is nearly symmetric: PARDISO factorises
