@@ -12,11 +12,10 @@ Three measurements, all on this machine in one command (never timed tests):
    step of 0.2 % axial strain) at about 10^3, 3 x 10^3, ..., 10^6 nodes (:data:`SIZES`)
    for ``efg``, ``fem-p1p1``, ``fem-th`` and ``fem-p1p1-stab`` on the same vertices, with
    the Cam-clay skeleton of the case and with a linear elastic one. The rule that bounds
-   the whole run at about 60 to 75 minutes on 2 cores (an estimate from the parts below): from 3 x 10^5 nodes
-   (:data:`LARGE_FROM`) only ``efg`` and ``fem-p1p1-stab`` with Cam-clay run, and a run
-   is stopped after 900 s there, 240 s below (:func:`time_limit`). The sizes up to 10^5
-   took about 10 minutes before fem-p1p1-stab was added; the four large runs are bounded
-   by 4 x 900 s. The linear solver is chosen by size (:func:`solver_for`): the direct
+   the whole run (57 minutes on 2 cores, the four large runs at most 4 x 900 s of it):
+   from 3 x 10^5 nodes (:data:`LARGE_FROM`) only ``efg`` and ``fem-p1p1-stab`` with
+   Cam-clay run, and a run is stopped after 900 s there, 240 s below
+   (:func:`time_limit`). The linear solver is chosen by size (:func:`solver_for`): the direct
    one, PARDISO where ``pypardiso`` is installed, else SuperLU, below 3 x 10^5 nodes
    (:data:`KRYLOV_FROM`), and ``soil.linear.linear_solver("krylov")`` from there, where
    EFG runs with Nitsche's conditions and the perturbation stabilisation, as the Krylov

@@ -17,6 +17,21 @@ it on PARDISO) factorised as LU of ``K`` and as PARDISO's LDL^T of ``sym(K)``; p
 their times and flops, one back-solve of each, and FGMRES on ``K`` preconditioned by the
 LDL^T (rows scaled as Newton scales them) to 1e-4, 1e-8 and 1e-10: iterations, time and
 the largest difference from the LU solution relative to its largest entry.
+
+``python docs/krylov_study.py --newton [nodes] [forcing ...]`` (default 3e3 nodes,
+forcings 1e-2 1e-4; under a minute): the Newton iterations of the bench step on the
+Krylov back-end with each largest forcing (``soil.linear.FORCING_MAX``): the scaled
+residuals and the step's FGMRES iterations, and full Newton on PARDISO
+(the current tangent factorised at every iteration) beside them.
+
+``python docs/krylov_study.py --schur [nodes ...]`` (default 3e3 1e4; about 4 minutes):
+which block of the Krylov preconditioner limits it. On the first tangent of the bench
+step as the Krylov sizes run it, the displacement-pressure rows scaled and ordered as
+:class:`soil.krylov.Krylov` does, FGMRES (restart 60) to 1e-8 on a random right-hand side,
+preconditioned block triangular with the displacement block solved by one AMG V-cycle or
+exactly (SuperLU) and the pressure block by the fixed-stress ``D - s diag(m_p)/M`` or the
+SIMPLE ``D - C diag(A)^-1 B`` approximation, each through AMG or exactly, and (up to 4000
+pressures) the true Schur complement ``D - C A^-1 B``.
 """
 
 import dataclasses
@@ -96,9 +111,9 @@ class _Captured(Exception):
     """The first tangent of a step, and its layout."""
 
 
-def first_tangent(nodes):
-    """The first Newton tangent of one bench step (penalty EFG, Cam-clay) and its
-    layout."""
+def first_tangent(nodes, krylov=False):
+    """The first Newton tangent of one bench step (EFG, Cam-clay; ``krylov``: with
+    Nitsche's conditions and the perturbation stabilisation) and its layout."""
     import efg.solver
     import soil.coupling
 
@@ -108,7 +123,7 @@ def first_tangent(nodes):
     original, soil.coupling.factorise = soil.coupling.factorise, capture
     try:
         with linear_solver("pardiso"):
-            efg.solver.solve(compression(nodes), progress=False)
+            efg.solver.solve(compression(nodes, krylov=krylov), progress=False)
     except _Captured as captured:
         return captured.args
     finally:
@@ -152,9 +167,118 @@ def symmetric(sizes):
                   f"{np.abs(x - exact).max() / np.abs(exact).max():.1e}", flush=True)
 
 
+class _Traced:
+    """A Newton system that prints its scaled residuals."""
+
+    def __init__(self, system):
+        self.system, self.layout = system, system.layout
+
+    def residual(self):
+        R, scaled = self.system.residual()
+        print(f"    residual {scaled:.3e}", flush=True)
+        return R, scaled
+
+    def tangent(self):
+        return self.system.tangent()
+
+    def advance(self, dx):
+        self.system.advance(dx)
+
+
+def newton_iterations(nodes, forcings):
+    """The Newton residuals of one bench step per largest forcing, and full Newton."""
+    import efg.solver
+    import soil.coupling
+    import soil.linear
+
+    original = efg.solver.newton, soil.linear.FORCING_MAX, soil.coupling.must_refactorise
+
+    def traced(system, stats):
+        before = stats["linear_iterations"]
+        try:
+            return original[0](_Traced(system), stats)
+        finally:
+            print(f"    FGMRES iterations {stats['linear_iterations'] - before}", flush=True)
+
+    efg.solver.newton = traced
+    try:
+        for forcing in forcings:
+            soil.linear.FORCING_MAX = soil.coupling.FORCING_MAX = forcing
+            print(f"{nodes} nodes, krylov, largest forcing {forcing:g}:", flush=True)
+            with linear_solver("krylov"):
+                try:
+                    efg.solver.solve(compression(nodes, krylov=True), progress=False)
+                except ConvergenceError as err:
+                    print(f"    failed: {err}", flush=True)
+        soil.coupling.must_refactorise = lambda *args: True
+        print(f"{nodes} nodes, pardiso, full Newton:", flush=True)
+        with linear_solver("pardiso"):
+            efg.solver.solve(compression(nodes, krylov=True), progress=False)
+    finally:
+        efg.solver.newton, soil.linear.FORCING_MAX, soil.coupling.must_refactorise = original
+        soil.coupling.FORCING_MAX = original[1]
+
+
+def schur(sizes):
+    """FGMRES iterations with each displacement and pressure block solve, per size."""
+    import pyamg
+    import scipy.linalg
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+    from pyamg.krylov import fgmres
+
+    from soil.krylov import RESTART, Krylov
+
+    for nodes in sizes:
+        K, layout = first_tangent(nodes, krylov=True)
+        precondition = Krylov(K, layout)
+        nu, n_p = precondition.sizes
+        order = precondition.order[:nu + n_p]
+        scaled = sp.csr_matrix(sp.diags(precondition.row[:nu + n_p])
+                               @ sp.csr_matrix(K)[order][:, order])
+        A, B = scaled[:nu, :nu], scaled[:nu, nu:]
+        C, D = scaled[nu:, :nu], scaled[nu:, nu:]
+        mass = precondition.row[nu:nu + n_p] * layout.mass[order[nu:]] / layout.modulus
+        simple = sp.csr_matrix(D - C @ sp.diags(1 / A.diagonal()) @ B)
+        fixed = sp.csr_matrix(D - sp.diags(-precondition.sign_p * mass))
+
+        def amg(S):
+            t = -1.0 if np.median(S.diagonal()) < 0 else 1.0
+            cycle = pyamg.smoothed_aggregation_solver(t * S, max_coarse=500).aspreconditioner()
+            return lambda r: t * cycle(r)
+
+        exact_A = spla.splu(sp.csc_matrix(A)).solve
+        pressures = {"fixed-stress, AMG": amg(fixed),
+                     "fixed-stress, exact": spla.splu(sp.csc_matrix(fixed)).solve,
+                     "SIMPLE, AMG": amg(simple),
+                     "SIMPLE, exact": spla.splu(sp.csc_matrix(simple)).solve}
+        if n_p <= 4000:
+            true = scipy.linalg.lu_factor(D.toarray() - C @ exact_A(B.toarray()))
+            pressures["true Schur, exact"] = lambda r: scipy.linalg.lu_solve(true, r)
+        b = np.random.default_rng(0).standard_normal(nu + n_p)
+        print(f"{nodes} nodes: {nu} displacements, {n_p} pressures", flush=True)
+        for a_name, solve_A in (("AMG", precondition.amg_u), ("exact", exact_A)):
+            for p_name, solve_S in pressures.items():
+                def apply(r, solve_A=solve_A, solve_S=solve_S):
+                    y_p = solve_S(r[nu:])
+                    return np.concatenate([solve_A(r[:nu] - B @ y_p), y_p])
+
+                residuals, tic = [], time.perf_counter()
+                fgmres(scaled, b, M=spla.LinearOperator(scaled.shape, apply), tol=1e-8,
+                       restart=RESTART, maxiter=10, residuals=residuals)
+                print(f"  A {a_name:5s} S {p_name:20s}: {len(residuals) - 1:4d} iterations, "
+                      f"{time.perf_counter() - tic:5.1f} s", flush=True)
+
+
 if __name__ == "__main__":
     if sys.argv[1:] == ["--runs"]:
         runs()
+    elif sys.argv[1:2] == ["--newton"]:
+        arguments = [float(a) for a in sys.argv[2:]]
+        newton_iterations(int(arguments[0]) if arguments else 3_000,
+                          arguments[1:] or [1e-2, 1e-4])
+    elif sys.argv[1:2] == ["--schur"]:
+        schur([int(float(n)) for n in sys.argv[2:]] or [3_000, 10_000])
     elif sys.argv[1:2] == ["--symmetric"]:
         symmetric([int(float(n)) for n in sys.argv[2:]] or [10_000, 100_000])
     else:

@@ -104,8 +104,7 @@ class Krylov:
     def adopt(self, K):
         """Solve with the tangent ``K`` from now on, keeping the preconditioner (built
         from the first tangent of the Newton step: within a step the tangent changes
-        little, and a preconditioner rebuilt at every iteration measured no fewer FGMRES
-        iterations per decade of residual). Returns True."""
+        little). Returns True."""
         self.K = sp.csr_matrix(K)
         return True
 
