@@ -24,6 +24,11 @@ Krylov back-end with each largest forcing (``soil.linear.FORCING_MAX``): the sca
 residuals and the step's FGMRES iterations, and full Newton on PARDISO
 (the current tangent factorised at every iteration) beside them.
 
+``python docs/krylov_study.py --memory [nodes]`` (default 3e4; a few minutes): where the
+memory of one Krylov step of the bench case goes: the process's resident and peak memory
+[MB] before the step, when the first tangent is assembled, after its preconditioner is
+built, and after the step.
+
 ``python docs/krylov_study.py --schur [nodes ...]`` (default 3e3 1e4; about 4 minutes):
 which block of the Krylov preconditioner limits it. On the first tangent of the bench
 step as the Krylov sizes run it, the displacement-pressure rows scaled and ordered as
@@ -219,6 +224,40 @@ def newton_iterations(nodes, forcings):
         soil.coupling.FORCING_MAX = original[1]
 
 
+def _memory(label):
+    """Print the process's resident and peak memory [MB] (Linux ``/proc``)."""
+    with open("/proc/self/status") as fh:
+        kb = {line.split(":")[0]: float(line.split()[1]) for line in fh
+              if line.startswith(("VmRSS", "VmHWM"))}
+    print(f"  {label:40s} resident {kb['VmRSS'] * 1.024e-3:8.0f} MB, peak "
+          f"{kb['VmHWM'] * 1.024e-3:8.0f} MB", flush=True)
+
+
+def memory(nodes):
+    """Resident and peak memory around the first preconditioner of a Krylov step."""
+    import efg.solver
+    import soil.coupling
+
+    original = soil.coupling.factorise
+
+    def watched(K, layout=None, symmetric=False):
+        _memory(f"tangent assembled ({K.nnz:.2e} entries)")
+        solver = original(K, layout, symmetric)
+        _memory("preconditioner built")
+        return solver
+
+    case = compression(nodes, krylov=True)
+    print(f"{len(case.nodes())} nodes, krylov:", flush=True)
+    _memory("before the step")
+    soil.coupling.factorise = watched
+    try:
+        with linear_solver("krylov"):
+            efg.solver.solve(case, progress=False)
+    finally:
+        soil.coupling.factorise = original
+    _memory("after the step")
+
+
 def schur(sizes):
     """FGMRES iterations with each displacement and pressure block solve, per size."""
     import pyamg
@@ -277,6 +316,8 @@ if __name__ == "__main__":
         arguments = [float(a) for a in sys.argv[2:]]
         newton_iterations(int(arguments[0]) if arguments else 3_000,
                           arguments[1:] or [1e-2, 1e-4])
+    elif sys.argv[1:2] == ["--memory"]:
+        memory(int(float(sys.argv[2])) if sys.argv[2:] else 30_000)
     elif sys.argv[1:2] == ["--schur"]:
         schur([int(float(n)) for n in sys.argv[2:]] or [3_000, 10_000])
     elif sys.argv[1:2] == ["--symmetric"]:
