@@ -237,8 +237,9 @@ def one_step(method, nodes, material, solver=None):
         wall = time.perf_counter() - tic
     summary = result.summary
     row = {"method": method, "material": material, "nodes": len(case.nodes()),
-           "solver": name, "efg": (f"{case.efg.essential}, {case.efg.stabilisation}"
-                                            if method == "efg" else "-"),
+           "solver": name,
+           "efg": (f"{case.efg.essential}, {case.efg.stabilisation}" if method == "efg"
+                   else "-"),
            "status": "ok", "dofs": summary["dofs"],
            "iterations": int(result.history.iterations.sum()),
            "linear_iterations": float(summary.get("linear_iterations", np.nan)),

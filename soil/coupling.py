@@ -198,8 +198,8 @@ def newton(system, stats):
 
     With the Krylov back-end a "factorisation" is a preconditioner, and Newton is
     Newton: every iteration assembles the current tangent and hands it to the
-    preconditioner (``adopt``), which is rebuilt only when it has gone stale
-    (:meth:`soil.krylov.Krylov.adopt`). Each correction is solved inexactly, to the
+    solver (:meth:`soil.krylov.Krylov.adopt`), which keeps the preconditioner of the
+    step's first tangent. Each correction is solved inexactly, to the
     relative residual of :func:`soil.linear.forcing` (Eisenstat-Walker): loosely far from
     the solution, tightly near it.
 

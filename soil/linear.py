@@ -248,8 +248,8 @@ def factorise(K, layout=None, symmetric=False):
         factorisation as PARDISO reports them (``iparm(19)``; 0 for the others);
         ``iterations``: Krylov iterations of its solves (0 for the direct ones);
         ``current``: whether Newton should hand it each new tangent (``adopt(K)``,
-        False when it cannot solve with ``K`` and ``K`` must be factorised anew; the
-        direct ones never can, the Krylov one can while its preconditioner is fresh).
+        False when it cannot solve with ``K`` and ``K`` must be factorised anew: the
+        direct ones never can, the Krylov one always can, through its preconditioner).
 
     Raises
     ------
