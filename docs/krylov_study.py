@@ -29,14 +29,15 @@ memory of one Krylov step of the bench case goes: the process's resident and pea
 [MB] before the step, when the first tangent is assembled, after its preconditioner is
 built, and after the step.
 
-``python docs/krylov_study.py --schur [nodes ...]`` (default 3e3 1e4; about 4 minutes):
+``python docs/krylov_study.py --schur [nodes ...]`` (default 3e3 1e4; about 5 minutes):
 which block of the Krylov preconditioner limits it. On the first tangent of the bench
 step as the Krylov sizes run it, the displacement-pressure rows scaled and ordered as
 :class:`soil.krylov.Krylov` does, FGMRES (restart 60) to 1e-8 on a random right-hand side,
-preconditioned block triangular with the displacement block solved by one AMG V-cycle or
-exactly (SuperLU) and the pressure block by the fixed-stress ``D - s diag(m_p)/M`` or the
-SIMPLE ``D - C diag(A)^-1 B`` approximation, each through AMG or exactly, and (up to 4000
-pressures) the true Schur complement ``D - C A^-1 B``.
+preconditioned block triangular with the displacement block solved by one AMG V-cycle
+(pyamg's default Gauss-Seidel smoother or the back-end's Schwarz) or exactly (SuperLU),
+and the pressure block by the fixed-stress ``D - s M_p/M`` with the lumped or the
+consistent mass, the SIMPLE ``D - C diag(A)^-1 B``, or (up to 4000 pressures) the true
+Schur complement ``D - C A^-1 B``, each exactly or through AMG.
 """
 
 import dataclasses
@@ -267,37 +268,48 @@ def schur(sizes):
     import scipy.sparse.linalg as spla
     from pyamg.krylov import fgmres
 
-    from soil.krylov import RESTART, Krylov
+    from soil.krylov import MAX_COARSE, RESTART, Krylov, _amg, _rigid_modes
 
     for nodes in sizes:
         K, layout = first_tangent(nodes, krylov=True)
         precondition = Krylov(K, layout)
         nu, n_p = precondition.sizes
         order = precondition.order[:nu + n_p]
-        scaled = sp.csr_matrix(sp.diags(precondition.row[:nu + n_p])
-                               @ sp.csr_matrix(K)[order][:, order])
+        row = precondition.row[:nu + n_p]
+        scaled = sp.csr_matrix(sp.diags(row) @ sp.csr_matrix(K)[order][:, order])
         A, B = scaled[:nu, :nu], scaled[:nu, nu:]
         C, D = scaled[nu:, :nu], scaled[nu:, nu:]
-        mass = precondition.row[nu:nu + n_p] * layout.mass[order[nu:]] / layout.modulus
-        simple = sp.csr_matrix(D - C @ sp.diags(1 / A.diagonal()) @ B)
-        fixed = sp.csr_matrix(D - sp.diags(-precondition.sign_p * mass))
+        s = -precondition.sign_p
+        mass = sp.csr_matrix(sp.diags(row[nu:]) @ layout.mass_matrix()[order[nu:]][:, order[nu:]]
+                             / layout.modulus)
+        lumped = sp.diags(np.asarray(mass.sum(axis=1)).ravel())
+        consistent = sp.csr_matrix(D - s * mass)
 
-        def amg(S):
-            t = -1.0 if np.median(S.diagonal()) < 0 else 1.0
-            cycle = pyamg.smoothed_aggregation_solver(t * S, max_coarse=500).aspreconditioner()
-            return lambda r: t * cycle(r)
+        def exact(M):
+            return spla.splu(sp.csc_matrix(M)).solve
 
-        exact_A = spla.splu(sp.csc_matrix(A)).solve
-        pressures = {"fixed-stress, AMG": amg(fixed),
-                     "fixed-stress, exact": spla.splu(sp.csc_matrix(fixed)).solve,
-                     "SIMPLE, AMG": amg(simple),
-                     "SIMPLE, exact": spla.splu(sp.csc_matrix(simple)).solve}
+        modes = _rigid_modes(layout.locations[order[:nu]], layout.fields[order[:nu]])
+        displacements = {
+            "AMG, Gauss-Seidel": pyamg.smoothed_aggregation_solver(
+                sp.bsr_matrix(A, blocksize=(2, 2)), B=modes,
+                max_coarse=MAX_COARSE).aspreconditioner(),
+            "AMG, Schwarz": precondition.amg_u,
+            "exact": exact(A)}
+        pressures = {"fixed-stress lumped, exact": exact(D - s * lumped),
+                     "SIMPLE, exact": exact(D - C @ sp.diags(1 / A.diagonal()) @ B),
+                     "fixed-stress, AMG Gauss-Seidel": (lambda r, t=-s, cycle=(
+                         pyamg.smoothed_aggregation_solver(
+                             -s * consistent, max_coarse=MAX_COARSE).aspreconditioner()):
+                         t * cycle(r)),
+                     "fixed-stress, AMG Schwarz": (lambda r, t=-s, cycle=_amg(-s * consistent):
+                                                   t * cycle(r)),
+                     "fixed-stress, exact": exact(consistent)}
         if n_p <= 4000:
-            true = scipy.linalg.lu_factor(D.toarray() - C @ exact_A(B.toarray()))
+            true = scipy.linalg.lu_factor(D.toarray() - C @ exact(A)(B.toarray()))
             pressures["true Schur, exact"] = lambda r: scipy.linalg.lu_solve(true, r)
         b = np.random.default_rng(0).standard_normal(nu + n_p)
         print(f"{nodes} nodes: {nu} displacements, {n_p} pressures", flush=True)
-        for a_name, solve_A in (("AMG", precondition.amg_u), ("exact", exact_A)):
+        for a_name, solve_A in displacements.items():
             for p_name, solve_S in pressures.items():
                 def apply(r, solve_A=solve_A, solve_S=solve_S):
                     y_p = solve_S(r[nu:])
@@ -306,8 +318,8 @@ def schur(sizes):
                 residuals, tic = [], time.perf_counter()
                 fgmres(scaled, b, M=spla.LinearOperator(scaled.shape, apply), tol=1e-8,
                        restart=RESTART, maxiter=10, residuals=residuals)
-                print(f"  A {a_name:5s} S {p_name:20s}: {len(residuals) - 1:4d} iterations, "
-                      f"{time.perf_counter() - tic:5.1f} s", flush=True)
+                print(f"  A {a_name:17s} S {p_name:30s}: {len(residuals) - 1:4d} "
+                      f"iterations, {time.perf_counter() - tic:5.1f} s", flush=True)
 
 
 if __name__ == "__main__":

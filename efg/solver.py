@@ -213,7 +213,8 @@ class _System:
         self.c_mean = disc.tp.phi.T @ disc.w
         self.du, self.p, self.plate, self.lam = (np.zeros(2 * self.n), points.p.copy(),
                                                  points.plate, 0.0)
-        self.layout = _layout(points.nodes, self.c_mean, model.scales, bc.rigid.any())
+        self.layout = _layout(points.nodes, partial(_pressure_mass, disc), model.scales,
+                              bc.rigid.any())
 
     def residual(self):
         """``[R_u, R_p, plate?, pin?]`` at the iterate and its scaled size beyond
@@ -503,8 +504,18 @@ def _uniqueness(model, disc, K, n):
     return value / model.scales.modulus
 
 
+def _pressure_mass(disc, extra=0):
+    """The consistent pressure mass ``int N_i N_j dV`` [m2 per unit thickness] on the
+    pressure rows and columns of ``[ux, uy, p]`` and ``extra`` more unknowns."""
+    n = disc.sp.phi.shape[1]
+    M = sp.coo_matrix(disc.tp.phi.T @ sp.diags(disc.w) @ disc.sp.phi)
+    size = 3 * n + extra
+    return sp.csr_matrix((M.data, (M.row + 2 * n, M.col + 2 * n)), shape=(size, size))
+
+
 def _layout(nodes, mass, scales, rigid):
-    """The :class:`soil.linear.Layout` of the unknowns ``[ux, uy, p, plate?, pin?]``."""
+    """The :class:`soil.linear.Layout` of the unknowns ``[ux, uy, p, plate?, pin?]``;
+    ``mass(extra)`` gives the pressure mass matrix."""
     n = len(nodes)
     plate, pin = [scales.force] * int(rigid), [scales.volume] * int(scales.pin_pressure)
     extra = len(plate) + len(pin)
@@ -513,7 +524,7 @@ def _layout(nodes, mass, scales, rigid):
                   locations=np.concatenate([nodes, nodes, nodes, np.zeros((extra, 2))]),
                   scales=np.concatenate([np.full(2 * n, scales.force),
                                          np.full(n, scales.volume), plate, pin]),
-                  mass=np.concatenate([np.zeros(2 * n), mass, np.zeros(extra)]),
+                  mass=partial(mass, extra=extra),
                   modulus=scales.modulus)
 
 

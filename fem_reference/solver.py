@@ -532,7 +532,7 @@ def _layout(T, n_u, u_locations, mass, scales):
     return Layout(fields=np.append(reduced, [-1] * pin),
                   locations=np.concatenate([locations[first], np.zeros((pin, 2))]),
                   scales=np.append(scale, [scales.volume] * pin),
-                  mass=np.append(np.where(reduced == 2, T.T @ mass, 0.0), [0.0] * pin),
+                  mass=sp.diags(np.append(np.where(reduced == 2, T.T @ mass, 0.0), [0.0] * pin)),
                   modulus=scales.modulus)
 
 

@@ -9,8 +9,9 @@ Two back-ends, one interface (:func:`factorise` returns an object with ``solve(b
   single-threaded. Its fill grows fast with the 20 to 30 neighbours of an MLS node, so it
   is slow on large EFG tangents (``make bench`` measures both).
 
-- ``"krylov"``: no factorisation; flexible GMRES with a block preconditioner (AMG on the
-  displacements, a fixed-stress Schur complement on the pore pressures; :mod:`soil.krylov`,
+- ``"krylov"``: no factorisation; flexible GMRES with a block preconditioner (AMG with a
+  Schwarz smoother on the displacements, a fixed-stress Schur complement with the pressure
+  mass matrix on the pore pressures; :mod:`soil.krylov`,
   needs pyamg). Each solve stops at the relative residual :func:`forcing` asks for
   (inexact Newton). Its memory grows as N, a factor's faster; it is chosen only when asked
   for (``make bench`` does from :data:`comparisons.bench.KRYLOV_FROM` nodes).
@@ -90,8 +91,11 @@ class Layout:
         Where each unknown lives [m]: the rigid-body modes of the displacement AMG.
     scales : ndarray, shape (n,), or None
         The residual scale of each row: force or volume per unit thickness.
-    mass : ndarray, shape (n,), or None
-        Lumped pressure mass ``int N_i dV`` [m2 per unit thickness] on pressure rows.
+    mass : scipy.sparse matrix, shape (n, n), a function returning one, or None
+        Pressure mass ``int N_i N_j dV`` [m2 per unit thickness] on pressure rows and
+        columns, zero elsewhere; a function is called when a solver first needs it
+        (:meth:`mass_matrix`). EFG gives the consistent matrix: MLS shape functions
+        overlap so widely that the lumped one overstates rough pressure modes.
     modulus : float
         P-wave modulus ``K + 4G/3`` of the initial state [kPa].
     """
@@ -100,7 +104,7 @@ class Layout:
     fields: np.ndarray = None
     locations: np.ndarray = None
     scales: np.ndarray = None
-    mass: np.ndarray = None
+    mass: object = None
     modulus: float = 1.0
 
     @property
@@ -108,6 +112,10 @@ class Layout:
         """True if the layout names enough for the Krylov back-end."""
         return all(v is not None for v in (self.fields, self.locations, self.scales,
                                            self.mass))
+
+    def mass_matrix(self):
+        """The pressure mass matrix (``mass``, built first if it is a function)."""
+        return sp.csr_matrix(self.mass() if callable(self.mass) else self.mass)
 
 
 def available(name):
