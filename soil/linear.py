@@ -49,10 +49,9 @@ from soil.krylov import Krylov
 #: A factorisation is kept while each iteration divides the residual by at least 1/this.
 CONTRACTION = 0.1
 #: Largest relative residual an inexact-Newton Krylov solve may stop at. On the undrained
-#: bench case (stabilised Nitsche EFG, 3e3 nodes) a first correction solved to 1e-2 is
-#: poor in the weakly controlled pressure modes, Newton stalls and the step is halved;
-#: solved to 1e-4 it takes the direct solvers' iterations (``python
-#: docs/krylov_study.py --newton 3000``).
+#: bench case (stabilised Nitsche EFG, 3e3 nodes) 1e-2 takes one more Newton iteration for
+#: 15 % fewer FGMRES iterations (``python docs/krylov_study.py --newton 3000``); with the
+#: earlier lumped-mass preconditioner Newton stalled at 1e-2.
 FORCING_MAX = 1e-4
 #: PARDISO ``iparm`` (MKL's 1-based numbering) of the node-blocked factorisation: own
 #: settings (1), METIS ordering (2), the user's permutation (5), one step of iterative
