@@ -226,30 +226,27 @@ def _schwarz(A, strength, aggregates, blocksize):
     subdomain's block of ``A`` inverted, by size in batches."""
     from pyamg import amg_core
 
-    graph = sp.csr_matrix(strength, dtype=float)
-    graph.data[:] = 1.0
+    graph = sp.csr_matrix(strength != 0, dtype=float)       # a copy: pyamg's C stays
     aggregates = sp.csr_matrix(aggregates, dtype=float)
     degree = np.asarray(graph.sum(axis=1)).ravel()
     share = sp.csr_matrix(sp.diags(1.0 / np.maximum(degree, 1.0)) @ graph @ aggregates)
     member = sp.csc_matrix(aggregates + (share >= OVERLAP).astype(float))
     member.sort_indices()
+    index = A.indices.dtype
     subdomain = (blocksize * member.indices[:, None] + np.arange(blocksize)).ravel()
-    pointer = blocksize * member.indptr
+    subdomain, pointer = subdomain.astype(index), (blocksize * member.indptr).astype(index)
     sizes = np.diff(pointer)
-    block_pointer = np.concatenate([[0], np.cumsum(sizes ** 2)])
+    block_pointer = np.concatenate([[0], np.cumsum(sizes.astype(np.int64) ** 2)])
     blocks = np.zeros(block_pointer[-1])
+    block_pointer = block_pointer.astype(index)
     A.sort_indices()
-    amg_core.extract_subblocks(A.indptr, A.indices, A.data, blocks,
-                               block_pointer.astype(A.indices.dtype),
-                               subdomain.astype(A.indices.dtype),
-                               pointer.astype(A.indices.dtype), len(sizes), A.shape[0])
+    amg_core.extract_subblocks(A.indptr, A.indices, A.data, blocks, block_pointer,
+                               subdomain, pointer, len(sizes), A.shape[0])
     for size in np.unique(sizes):
         at = block_pointer[:-1][sizes == size][:, None] + np.arange(size * size)
         blocks[at] = np.linalg.inv(blocks[at].reshape(-1, size, size)).reshape(len(at), -1)
-    index = A.indices.dtype
-    return {"subdomain": subdomain.astype(index), "subdomain_ptr": pointer.astype(index),
-            "inv_subblock": blocks, "inv_subblock_ptr": block_pointer.astype(index),
-            "sweep": "symmetric"}
+    return {"subdomain": subdomain, "subdomain_ptr": pointer, "inv_subblock": blocks,
+            "inv_subblock_ptr": block_pointer, "sweep": "symmetric"}
 
 
 def _amg_schur(A, B, C, D, mass):
