@@ -24,6 +24,10 @@ Krylov back-end with each largest forcing (``soil.linear.FORCING_MAX``): the sca
 residuals and the step's FGMRES iterations, and full Newton on PARDISO
 (the current tangent factorised at every iteration) beside them.
 
+``python docs/krylov_study.py --unstabilised [nodes]`` (default 3e3; under a minute): the
+bench step on the Krylov back-end with EFG's pressure stabilisation ``"none"`` and
+``"perturbation"``: Newton and FGMRES iterations, or the failure.
+
 ``python docs/krylov_study.py --memory [nodes]`` (default 3e4; a few minutes): where the
 memory of one Krylov step of the bench case goes: the process's resident and peak memory
 [MB] before the step, when the first tangent is assembled, after its preconditioner is
@@ -226,6 +230,22 @@ def newton_iterations(nodes, forcings):
         soil.coupling.FORCING_MAX = original[1]
 
 
+def unstabilised(nodes):
+    """The bench step on the Krylov back-end without and with EFG's stabilisation."""
+    import efg.solver
+
+    for kind in ("none", "perturbation"):
+        case = compression(nodes, krylov=True)
+        case = dataclasses.replace(case, efg=dataclasses.replace(case.efg, stabilisation=kind))
+        with linear_solver("krylov"):
+            try:
+                s = efg.solver.solve(case, progress=False).summary
+                print(f"{nodes} nodes, stabilisation {kind}: Newton {s['newton_iterations']}, "
+                      f"FGMRES {s['linear_iterations']}, cut-backs {s['cutbacks']}", flush=True)
+            except ConvergenceError as err:
+                print(f"{nodes} nodes, stabilisation {kind}: failed: {err}", flush=True)
+
+
 def _memory(label):
     """Print the process's resident and peak memory [MB] (Linux ``/proc``)."""
     with open("/proc/self/status") as fh:
@@ -329,6 +349,8 @@ if __name__ == "__main__":
         arguments = [float(a) for a in sys.argv[2:]]
         newton_iterations(int(arguments[0]) if arguments else 3_000,
                           arguments[1:] or [1e-2, 1e-4])
+    elif sys.argv[1:2] == ["--unstabilised"]:
+        unstabilised(int(float(sys.argv[2])) if sys.argv[2:] else 3_000)
     elif sys.argv[1:2] == ["--memory"]:
         memory(int(float(sys.argv[2])) if sys.argv[2:] else 30_000)
     elif sys.argv[1:2] == ["--schur"]:
