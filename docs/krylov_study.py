@@ -33,6 +33,12 @@ memory of one Krylov step of the bench case goes: the process's resident and pea
 [MB] before the step, when the first tangent is assembled, after its preconditioner is
 built, and after the step.
 
+``python docs/krylov_study.py --smoother [nodes ...]`` (default 1e4 3e4; about 10
+minutes): one Krylov step of the bench case per method (EFG and the stable FEM pairs)
+with each finest-level AMG smoother (``soil.linear.Layout.smoother``): step and solve
+time, Newton and FGMRES iterations. Then whole unconfined-compression runs of fem-th and
+fem-q2q1 with each smoother: time, Newton and FGMRES iterations, cut-backs.
+
 ``python docs/krylov_study.py --schur [nodes ...]`` (default 3e3 1e4; about 5 minutes):
 which block of the Krylov preconditioner limits it. On the first tangent of the bench
 step as the Krylov sizes run it, the displacement-pressure rows scaled and ordered as
@@ -115,6 +121,61 @@ def runs():
             print("  agreement", {c: float(np.abs(a[c] - b[c]).max()
                                            / max(np.abs(a[c]).max(), 1e-30))
                                   for c in ("p", "q", "settlement")}, flush=True)
+
+
+#: The methods of ``--smoother``.
+SMOOTHED = ("efg", "fem-p1p1-stab", "fem-q2q1", "fem-th")
+
+
+def _smoothed(smoother, fn, *args):
+    """``fn(*args)`` with every Krylov preconditioner smoothed by ``smoother``."""
+    import soil.krylov
+
+    build = soil.krylov.Krylov.__init__
+
+    def forced(self, K, layout):
+        build(self, K, dataclasses.replace(layout, smoother=smoother))
+
+    soil.krylov.Krylov.__init__ = forced
+    try:
+        return fn(*args)
+    finally:
+        soil.krylov.Krylov.__init__ = build
+
+
+def smoothers(sizes):
+    """One Krylov step per method, size and smoother; :func:`whole_runs`."""
+    for nodes in sizes:
+        for method in SMOOTHED:
+            for smoother in ("gauss_seidel", "schwarz"):
+                row, status = in_child(_smoothed, smoother, one_step, method, nodes,
+                                       "cam-clay", "krylov", timeout=LIMIT)
+                keys = ("step", "solve", "iterations", "linear_iterations")
+                print(f"{nodes:8d} {method:14s} {smoother:12s} {status}",
+                      {k: round(row[k], 1) for k in keys} if status == "ok" else row,
+                      flush=True)
+    whole_runs()
+
+
+def whole_runs():
+    """Unconfined compression with the quadratic FEM pairs, each smoother."""
+    import fem_reference.solver
+
+    case = load_case("unconfined-compression")
+    for method in ("fem-th", "fem-q2q1"):
+        for smoother in ("gauss_seidel", "schwarz"):
+            tic = time.perf_counter()
+            with linear_solver("krylov"):
+                try:
+                    s = _smoothed(smoother, fem_reference.solver.solve, case, method,
+                                  False).summary
+                    print(f"unconfined-compression {method} {smoother}: "
+                          f"{time.perf_counter() - tic:.0f} s, Newton "
+                          f"{s['newton_iterations']}, FGMRES {s['linear_iterations']}, "
+                          f"cut-backs {s['cutbacks']}", flush=True)
+                except ConvergenceError as err:
+                    print(f"unconfined-compression {method} {smoother}: failed: {err}",
+                          flush=True)
 
 
 class _Captured(Exception):
@@ -282,13 +343,12 @@ def memory(nodes):
 
 def schur(sizes):
     """FGMRES iterations with each displacement and pressure block solve, per size."""
-    import pyamg
     import scipy.linalg
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
     from pyamg.krylov import fgmres
 
-    from soil.krylov import MAX_COARSE, RESTART, Krylov, _amg, _rigid_modes
+    from soil.krylov import RESTART, Krylov, _amg, _rigid_modes
 
     for nodes in sizes:
         K, layout = first_tangent(nodes, krylov=True)
@@ -310,19 +370,17 @@ def schur(sizes):
 
         modes = _rigid_modes(layout.locations[order[:nu]], layout.fields[order[:nu]])
         displacements = {
-            "AMG, Gauss-Seidel": pyamg.smoothed_aggregation_solver(
-                sp.bsr_matrix(A, blocksize=(2, 2)), B=modes,
-                max_coarse=MAX_COARSE).aspreconditioner(),
+            "AMG, Gauss-Seidel": _amg(A, "gauss_seidel", modes, 2),
             "AMG, Schwarz": precondition.amg_u,
             "exact": exact(A)}
         pressures = {"fixed-stress lumped, exact": exact(D - s * lumped),
                      "SIMPLE, exact": exact(D - C @ sp.diags(1 / A.diagonal()) @ B),
-                     "fixed-stress, AMG Gauss-Seidel": (lambda r, t=-s, cycle=(
-                         pyamg.smoothed_aggregation_solver(
-                             -s * consistent, max_coarse=MAX_COARSE).aspreconditioner()):
+                     "fixed-stress, AMG Gauss-Seidel": (
+                         lambda r, t=-s, cycle=_amg(-s * consistent, "gauss_seidel"):
                          t * cycle(r)),
-                     "fixed-stress, AMG Schwarz": (lambda r, t=-s, cycle=_amg(-s * consistent):
-                                                   t * cycle(r)),
+                     "fixed-stress, AMG Schwarz": (
+                         lambda r, t=-s, cycle=_amg(-s * consistent, "schwarz"):
+                         t * cycle(r)),
                      "fixed-stress, exact": exact(consistent)}
         if n_p <= 4000:
             true = scipy.linalg.lu_factor(D.toarray() - C @ exact(A)(B.toarray()))
@@ -353,6 +411,8 @@ if __name__ == "__main__":
         unstabilised(int(float(sys.argv[2])) if sys.argv[2:] else 3_000)
     elif sys.argv[1:2] == ["--memory"]:
         memory(int(float(sys.argv[2])) if sys.argv[2:] else 30_000)
+    elif sys.argv[1:2] == ["--smoother"]:
+        smoothers([int(float(n)) for n in sys.argv[2:]] or [10_000, 30_000])
     elif sys.argv[1:2] == ["--schur"]:
         schur([int(float(n)) for n in sys.argv[2:]] or [3_000, 10_000])
     elif sys.argv[1:2] == ["--symmetric"]:

@@ -525,7 +525,7 @@ def _layout(nodes, mass, scales, rigid):
                   scales=np.concatenate([np.full(2 * n, scales.force),
                                          np.full(n, scales.volume), plate, pin]),
                   mass=partial(mass, extra=extra),
-                  modulus=scales.modulus)
+                  modulus=scales.modulus, smoother="schwarz")
 
 
 def _roundoff(disc, points, du, du_bar, p, plate, alpha_u, alpha_p, rigid_w):

@@ -457,7 +457,8 @@ class _System:
         self.x, self.lam = x, 0.0
         self.c_mean = np.zeros(len(x))
         self.c_mean[2 * n_u:] = disc.p.vector(disc.dx[..., None, None] * [1.0, 0, 0])
-        self.layout = _layout(con.T, n_u, disc.doflocs.T, self.c_mean, model.scales)
+        self.layout = _layout(con.T, n_u, disc.doflocs.T, self.c_mean, model.scales,
+                              model.space.pair.smoother)
 
     def residual(self):
         """The reduced residual (plus the pin) and its scaled size."""
@@ -515,10 +516,10 @@ class _System:
                        uniqueness=uniqueness, reactions=reactions)
 
 
-def _layout(T, n_u, u_locations, mass, scales):
+def _layout(T, n_u, u_locations, mass, scales, smoother):
     """The :class:`soil.linear.Layout` of the reduced unknowns (``T``'s columns, the
     mean-pressure multiplier last when pinned): a column of one full DOF has its field,
-    the plate's column (many) none."""
+    the plate's column (many) none; ``smoother`` the pair's AMG smoother."""
     n = T.shape[0]
     fields = np.concatenate([np.zeros(n_u, int), np.ones(n_u, int),
                              np.full(n - 2 * n_u, 2)])
@@ -529,11 +530,11 @@ def _layout(T, n_u, u_locations, mass, scales):
     locations = np.concatenate([u_locations, u_locations, np.zeros((n - 2 * n_u, 2))])
     scale = np.where(reduced == 2, scales.volume, scales.force)
     pin = int(scales.pin_pressure)
-    return Layout(fields=np.append(reduced, [-1] * pin),
+    return Layout(fields=np.append(reduced, np.full(pin, -1)),
                   locations=np.concatenate([locations[first], np.zeros((pin, 2))]),
                   scales=np.append(scale, [scales.volume] * pin),
                   mass=sp.diags(np.append(np.where(reduced == 2, T.T @ mass, 0.0), [0.0] * pin)),
-                  modulus=scales.modulus)
+                  modulus=scales.modulus, smoother=smoother)
 
 
 def _residual(model, disc, current, x, stress, J, Finv, dt):

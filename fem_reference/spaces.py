@@ -30,7 +30,8 @@ class Pair:
     """An element pair: cell shape, displacement and pressure elements, Gauss order.
 
     ``stabilised`` adds the flow-equation perturbation of Aguilar et al. (2008) to the
-    continuity equation (see :mod:`fem_reference.solver`).
+    continuity equation (see :mod:`fem_reference.solver`). ``smoother`` is the Krylov
+    back-end's AMG smoother for the pair (:class:`soil.linear.Layout`).
     """
 
     shape: str
@@ -38,6 +39,7 @@ class Pair:
     p_element: type
     intorder: int
     stabilised: bool = False
+    smoother: str = "gauss_seidel"
 
 
 #: The FEM methods of ``soilwater run --method``.

@@ -33,12 +33,14 @@ its MLS functions overlap so widely that the lumped mass overstates rough pressu
 (with exact block solves FGMRES takes 319 iterations with it at 10^4 nodes, 11 with the
 consistent one: ``python docs/krylov_study.py --schur``).
 
-Each V-cycle smooths its finest level by multiplicative Schwarz on overlapping
-aggregates (:func:`_schwarz`): the first coarsening's aggregates, each grown by every
-unknown with at least :data:`OVERLAP` of its matrix neighbours in it, solved exactly in
-turn (their inverses kept). Point Gauss-Seidel, pyamg's default, smooths a wide MLS
-stencil poorly (77 FGMRES iterations against 16 at 10^4 nodes, the Schur complement
-solved exactly). Coarser levels smooth by symmetric Gauss-Seidel. Unknowns of neither
+The V-cycles smooth by symmetric Gauss-Seidel on node blocks (pyamg's default), except
+where the discretisation asks for Schwarz (``Layout.smoother``): then the finest level is
+smoothed by multiplicative Schwarz on overlapping aggregates (:func:`_schwarz`): the first
+coarsening's aggregates, each grown by every unknown with at least :data:`OVERLAP` of its
+matrix neighbours in it, solved exactly in turn (their inverses kept). Gauss-Seidel
+smooths a wide MLS stencil poorly (77 FGMRES iterations against 16 at 10^4 nodes, the
+Schur complement solved exactly), and P1 elements well enough that Schwarz's dearer sweeps
+do not pay (``python docs/krylov_study.py --smoother``). Unknowns of neither
 field (a rigid plate's settlement, the mean-pressure multiplier) are eliminated exactly
 through the preconditioner (a dense Schur complement of their few rows).
 
@@ -66,6 +68,9 @@ MAX_COARSE = 500
 #: An unknown joins the Schwarz subdomain of an aggregate when at least this share of
 #: its matrix neighbours (nodes, for node blocks) belongs to the aggregate.
 OVERLAP = 0.25
+#: The smoother of every level Schwarz does not smooth: symmetric Gauss-Seidel on the
+#: matrix's blocks (nodes; pyamg's default).
+GAUSS_SEIDEL = ("block_gauss_seidel", {"sweep": "symmetric"})
 
 
 class Krylov:
@@ -108,9 +113,9 @@ class Krylov:
         C, D = scaled[nu:nm, :nu], scaled[nu:nm, nu:nm]
         del scaled                                    # the blocks only, from here
         mass = sp.diags(self.row[nu:nm]) @ layout.mass_matrix()[p][:, p] / layout.modulus
-        self.amg_p, self.sign_p = _amg_schur(A, self.B, C, D, mass)
+        self.amg_p, self.sign_p = _amg_schur(A, self.B, C, D, mass, layout.smoother)
         del C, D, mass
-        self.amg_u = _amg(A, _rigid_modes(layout.locations[u], fields[u]),
+        self.amg_u = _amg(A, layout.smoother, _rigid_modes(layout.locations[u], fields[u]),
                           2 if _pairs(layout, u) else 1)
         del A
         if len(other):
@@ -199,19 +204,21 @@ def _rigid_modes(locations, fields):
     return modes
 
 
-def _amg(A, modes=None, blocksize=1):
+def _amg(A, smoother, modes=None, blocksize=1):
     """One V-cycle of smoothed-aggregation AMG on ``A`` (near-null ``modes``; unknowns in
-    node blocks of ``blocksize``), its finest level smoothed by :func:`_schwarz`."""
+    node blocks of ``blocksize``), its finest level smoothed by :func:`_schwarz` if
+    ``smoother`` is ``"schwarz"``, every other level by symmetric Gauss-Seidel."""
     import pyamg
     from pyamg.relaxation.smoothing import change_smoothers
 
     matrix = sp.bsr_matrix(A, blocksize=(blocksize,) * 2) if blocksize > 1 else sp.csr_matrix(A)
-    ml = pyamg.smoothed_aggregation_solver(matrix, B=modes, max_coarse=MAX_COARSE, keep=True)
-    if len(ml.levels) > 1:                  # else solved on the coarse grid alone
+    ml = pyamg.smoothed_aggregation_solver(matrix, B=modes, max_coarse=MAX_COARSE, keep=True,
+                                           presmoother=GAUSS_SEIDEL, postsmoother=GAUSS_SEIDEL)
+    if len(ml.levels) > 1 and smoother == "schwarz":   # else solved on the coarse grid alone
         fine = ml.levels[0]
-        smoother = [("schwarz", _schwarz(sp.csr_matrix(A), fine.C, fine.AggOp, blocksize)),
-                    ("gauss_seidel", {"sweep": "symmetric"})]
-        change_smoothers(ml, smoother, smoother)
+        levels = [("schwarz", _schwarz(sp.csr_matrix(A), fine.C, fine.AggOp, blocksize)),
+                  GAUSS_SEIDEL]
+        change_smoothers(ml, levels, levels)
         fine.A = fine.Acsr                  # the smoother's CSR copy serves the cycle too
     for level in ml.levels:                 # what keep=True held for the smoother's setup
         for name in ("C", "AggOp", "T", "P0"):
@@ -222,15 +229,21 @@ def _amg(A, modes=None, blocksize=1):
 def _schwarz(A, strength, aggregates, blocksize):
     """pyamg's ``schwarz`` smoother settings (symmetric sweep) on the overlapping
     subdomains of ``aggregates`` (nodes x aggregates): an aggregate's nodes and every
-    node with at least :data:`OVERLAP` of its ``strength`` neighbours in it; each
-    subdomain's block of ``A`` inverted, by size in batches."""
+    node with at least :data:`OVERLAP` of its ``strength`` neighbours in it, and each
+    node of no aggregate (no strong neighbour) alone; each subdomain's block of ``A``
+    inverted, by size in batches."""
     from pyamg import amg_core
 
     graph = sp.csr_matrix(strength != 0, dtype=float)       # a copy: pyamg's C stays
     aggregates = sp.csr_matrix(aggregates, dtype=float)
     degree = np.asarray(graph.sum(axis=1)).ravel()
     share = sp.csr_matrix(sp.diags(1.0 / np.maximum(degree, 1.0)) @ graph @ aggregates)
-    member = sp.csc_matrix(aggregates + (share >= OVERLAP).astype(float))
+    member = sp.csr_matrix(aggregates + (share >= OVERLAP).astype(float))
+    alone = np.flatnonzero(np.diff(member.indptr) == 0)     # unaggregated: isolated nodes
+    alone = sp.csr_matrix((np.ones(len(alone)), (alone, np.arange(len(alone)))),
+                          shape=(member.shape[0], len(alone)))
+    member = sp.csc_matrix(sp.hstack([member, alone]))
+    member = member[:, np.diff(member.indptr) > 0]
     member.sort_indices()
     index = A.indices.dtype
     subdomain = (blocksize * member.indices[:, None] + np.arange(blocksize)).ravel()
@@ -249,10 +262,10 @@ def _schwarz(A, strength, aggregates, blocksize):
             "inv_subblock_ptr": block_pointer, "sweep": "symmetric"}
 
 
-def _amg_schur(A, B, C, D, mass):
+def _amg_schur(A, B, C, D, mass, smoother):
     """One V-cycle of :func:`_amg` on the fixed-stress Schur complement ``D - s mass``, s
     the sign of ``C A^-1 B`` (from its diagonal), multiplied by ``t = -s`` to make its
     diagonal positive. Returns the cycle of ``t S`` and t."""
     simple = sp.csr_matrix(C.multiply(B.T)) @ (1.0 / A.diagonal())
     sign = 1.0 if np.median(simple) >= 0 else -1.0
-    return _amg(-sign * (D - sign * mass)), -sign
+    return _amg(-sign * (D - sign * mass), smoother), -sign

@@ -97,6 +97,13 @@ class Layout:
         overlap so widely that the lumped one overstates rough pressure modes.
     modulus : float
         P-wave modulus ``K + 4G/3`` of the initial state [kPa].
+    smoother : str
+        How the Krylov back-end's AMG V-cycles smooth their finest level:
+        ``"gauss_seidel"`` (symmetric point Gauss-Seidel) or ``"schwarz"`` (multiplicative
+        Schwarz on overlapping aggregates, :func:`soil.krylov._schwarz`: dearer per
+        sweep, needed where shape functions reach beyond their nearest nodes, MLS's and
+        quadratic elements'). The discretisation chooses
+        (``python docs/krylov_study.py --smoother``).
     """
 
     groups: np.ndarray = None
@@ -105,6 +112,7 @@ class Layout:
     scales: np.ndarray = None
     mass: object = None
     modulus: float = 1.0
+    smoother: str = "gauss_seidel"
 
     @property
     def complete(self):

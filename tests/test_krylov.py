@@ -10,7 +10,7 @@ import efg.solver
 import fem_reference.solver
 from comparisons.bench import compression
 from soil.errors import InputError
-from soil.krylov import _schwarz
+from soil.krylov import _amg, _schwarz
 from soil.linear import Layout, factorise, linear_solver
 from soil.problems import load_case
 
@@ -106,6 +106,22 @@ def test_schwarz_subdomains_cover_every_unknown_and_keep_their_inverses():
         block = A[dofs][:, dofs].toarray()
         inverse = inv[inv_ptr[i]:inv_ptr[i + 1]].reshape(len(dofs), len(dofs))
         assert np.allclose(inverse @ block, np.eye(len(dofs)), atol=1e-10)
+
+
+def test_schwarz_keeps_unknowns_without_strong_neighbours():
+    """Unknowns no aggregate holds (a diagonal block: fem-th's pressure complement at
+    k = 0) are subdomains of their own, and a diagonal matrix alone is solved exactly."""
+    import pyamg
+
+    one = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(20, 20))
+    diagonal = sp.diags(np.linspace(1.0, 2.0, 50))
+    for M in (sp.csr_matrix(sp.block_diag([sp.kronsum(one, one), diagonal])),
+              sp.csr_matrix(diagonal)):
+        ml = pyamg.smoothed_aggregation_solver(M, max_coarse=10, keep=True)
+        kept = _schwarz(M, ml.levels[0].C, ml.levels[0].AggOp, 1)
+        assert set(kept["subdomain"]) == set(range(M.shape[0]))
+    b = np.arange(50.0)
+    assert np.allclose(_amg(M, "schwarz")(b), b / diagonal.diagonal(), rtol=1e-12)
 
 
 def test_efg_corrections_take_few_iterations():
