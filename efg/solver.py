@@ -696,7 +696,7 @@ def _bordered(K, plate, c_mean, pin):
     if not cols:
         return K
     C, B = sp.csc_matrix(np.column_stack(cols)), sp.csr_matrix(np.vstack(rows))
-    return sp.bmat([[K, C], [B, sp.diags(corner)]], format="csc")
+    return sp.bmat([[K, C], [B, sp.diags(corner)]], format="csr")
 
 
 def _gradient(shape, du, n):

@@ -44,7 +44,7 @@ class Pair:
 
 #: The FEM methods of ``soilwater run --method``.
 PAIRS = {
-    "fem-th": Pair("triangle", ElementTriP2, ElementTriP1, 4),
+    "fem-th": Pair("triangle", ElementTriP2, ElementTriP1, 4, smoother="schwarz"),
     "fem-p1p1": Pair("triangle", ElementTriP1, ElementTriP1, 2),
     "fem-p1p1-stab": Pair("triangle", ElementTriP1, ElementTriP1, 2, stabilised=True),
     "fem-q1q1": Pair("quad", ElementQuad1, ElementQuad1, 3),

@@ -264,13 +264,17 @@ def newton(system, stats):
             raise ConvergenceError(f"Newton residual {residual:.2e} after {iteration} "
                                    "iterations")
         if must_refactorise(lu, residual, previous) or lu.current:
+            first = lu is None
+            if not first:
+                lu.release()                # one tangent in memory at a time
             with timed(stats["timings"], "assembly_s"):
                 K = system.tangent()
-            if lu is None or not lu.adopt(K):
+            if first or not lu.adopt(K):
+                lu = None                   # and one factorisation
                 with timed(stats["timings"], "solve_s"):
-                    lu = factorise(K, system.layout,
-                                   symmetric=SYMMETRIC_FIRST and lu is None)
+                    lu = factorise(K, system.layout, symmetric=SYMMETRIC_FIRST and first)
                 _count(stats, lu)
+            del K                           # the solver holds what it needs
         eta = forcing(residual, previous, eta, TOLERANCE)
         previous, before = residual, lu.iterations
         with timed(stats["timings"], "solve_s"):

@@ -297,6 +297,9 @@ class _Factor:
         """False: a new tangent needs a new factorisation."""
         return False
 
+    def release(self):
+        """Nothing: a factorisation holds no tangent Newton could free."""
+
 
 class _SuperLU(_Factor):
     """SuperLU's LU factorisation of ``K`` (it has no symmetric mode)."""
