@@ -101,9 +101,8 @@ class Layout:
         How the Krylov back-end's AMG V-cycles smooth their finest level:
         ``"gauss_seidel"`` (symmetric point Gauss-Seidel) or ``"schwarz"`` (multiplicative
         Schwarz on overlapping aggregates, :func:`soil.krylov._schwarz`: dearer per
-        sweep, needed where shape functions reach beyond their nearest nodes, MLS's and
-        quadratic elements'). The discretisation chooses
-        (``python docs/krylov_study.py --smoother``).
+        sweep, it pays for MLS's wide stencils and for fem-th through a softening peak).
+        The discretisation chooses (``python docs/krylov_study.py --smoother``).
     """
 
     groups: np.ndarray = None

@@ -72,10 +72,10 @@ def test_an_adopted_tangent_is_solved_with_the_kept_preconditioner(monkeypatch):
 
 def test_preconditioner_repeats_and_leaves_the_random_stream(monkeypatch):
     """pyamg's setup draws ``np.random`` vectors (its spectral-radius estimates): two
-    preconditioners of one tangent apply alike (unseeded, they differed, and so did a
-    run's FGMRES count: 96858 to 279804 in five runs of fem-th's unconfined compression
-    with Gauss-Seidel),
-    and the caller's random stream goes on as if no setup had drawn from it."""
+    preconditioners of one tangent apply alike, and the caller's random stream goes on as
+    if no setup had drawn from it. Unseeded, they differed, and so did a run's FGMRES
+    count: 96858 to 279804 in five runs of fem-th's unconfined compression (Gauss-Seidel
+    smoother)."""
     monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "krylov")
     K, layout = biot(n=30, dt=1e-2)
     np.random.seed(1)
