@@ -40,6 +40,13 @@ time, Newton and FGMRES iterations. Then whole unconfined-compression runs of fe
 fem-q2q1 (on the grid without centres) with each smoother: time, Newton and FGMRES
 iterations, cut-backs.
 
+``python docs/krylov_study.py --overlap [nodes] [overlap ...]`` (default 3e4 nodes,
+overlaps 0.25 0.5 1.01; a few minutes): the Schwarz subdomains' growth
+(``soil.krylov.OVERLAP``; above 1 no unknown joins a neighbouring aggregate) against cost,
+on the first tangent of the bench step as the Krylov sizes run it: the preconditioner's
+build time and kept inverses [MB], and FGMRES on a random right-hand side to 1e-8:
+iterations and time.
+
 ``python docs/krylov_study.py --schur [nodes ...]`` (default 3e3 1e4; about 5 minutes):
 which block of the Krylov preconditioner limits it. On the first tangent of the bench
 step as the Krylov sizes run it, the displacement-pressure rows scaled and ordered as
@@ -142,6 +149,35 @@ def _smoothed(smoother, fn, *args):
         return fn(*args)
     finally:
         soil.krylov.Krylov.__init__ = build
+
+
+def overlaps(nodes, shares):
+    """Build and solve time, inverses and iterations of the preconditioner per overlap."""
+    import soil.krylov
+    from soil.krylov import Krylov
+
+    K, layout = first_tangent(nodes, krylov=True)
+    b = np.random.default_rng(0).standard_normal(K.shape[0])
+    kept, schwarz = [], soil.krylov._schwarz
+
+    def measured(*args):
+        settings = schwarz(*args)
+        kept.append(settings["inv_subblock"].nbytes)
+        return settings
+
+    soil.krylov._schwarz, default = measured, soil.krylov.OVERLAP
+    try:
+        for share in shares:
+            soil.krylov.OVERLAP, kept[:] = share, []
+            tic = time.perf_counter()
+            solver = Krylov(K, layout)
+            built = time.perf_counter() - tic
+            solver.solve(b, rtol=1e-8)
+            print(f"{nodes} nodes, overlap {share}: build {built:.1f} s, inverses "
+                  f"{sum(kept) / 1e6:.0f} MB, FGMRES {solver.iterations} iterations, "
+                  f"{time.perf_counter() - tic - built:.1f} s", flush=True)
+    finally:
+        soil.krylov._schwarz, soil.krylov.OVERLAP = schwarz, default
 
 
 def smoothers(sizes):
@@ -413,6 +449,9 @@ if __name__ == "__main__":
         unstabilised(int(float(sys.argv[2])) if sys.argv[2:] else 3_000)
     elif sys.argv[1:2] == ["--memory"]:
         memory(int(float(sys.argv[2])) if sys.argv[2:] else 30_000)
+    elif sys.argv[1:2] == ["--overlap"]:
+        arguments = [float(a) for a in sys.argv[2:]]
+        overlaps(int(arguments[0]) if arguments else 30_000, arguments[1:] or [0.25, 0.5, 1.01])
     elif sys.argv[1:2] == ["--smoother"]:
         smoothers([int(float(n)) for n in sys.argv[2:]] or [10_000, 30_000])
     elif sys.argv[1:2] == ["--schur"]:
