@@ -223,12 +223,14 @@ def _amg(A, smoother, modes=None, blocksize=1):
     import pyamg
     from pyamg.relaxation.smoothing import change_smoothers
 
+    if smoother not in ("gauss_seidel", "schwarz"):
+        raise ValueError(f"Layout.smoother={smoother!r}: use 'gauss_seidel' or 'schwarz'")
     matrix = sp.bsr_matrix(A, blocksize=(blocksize,) * 2) if blocksize > 1 else sp.csr_matrix(A)
     with _seeded():
         ml = pyamg.smoothed_aggregation_solver(matrix, B=modes, max_coarse=MAX_COARSE,
                                                keep=True, presmoother=GAUSS_SEIDEL,
                                                postsmoother=GAUSS_SEIDEL)
-    if len(ml.levels) > 1 and smoother == "schwarz":   # else solved on the coarse grid alone
+    if smoother == "schwarz" and len(ml.levels) > 1:   # one level: a coarse solve alone
         fine = ml.levels[0]
         kept = _schwarz(sp.csr_matrix(A), fine.C, fine.AggOp, blocksize)
         change_smoothers(ml, [("schwarz", dict(kept, sweep="forward")), GAUSS_SEIDEL],
