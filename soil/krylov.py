@@ -223,8 +223,6 @@ def _amg(A, smoother, modes=None, blocksize=1):
     import pyamg
     from pyamg.relaxation.smoothing import change_smoothers
 
-    if smoother not in ("gauss_seidel", "schwarz"):
-        raise ValueError(f"Layout.smoother={smoother!r}: use 'gauss_seidel' or 'schwarz'")
     matrix = sp.bsr_matrix(A, blocksize=(blocksize,) * 2) if blocksize > 1 else sp.csr_matrix(A)
     with _seeded():
         ml = pyamg.smoothed_aggregation_solver(matrix, B=modes, max_coarse=MAX_COARSE,
@@ -269,11 +267,9 @@ def _schwarz(A, strength, aggregates, blocksize):
     degree = np.asarray(graph.sum(axis=1)).ravel()
     share = sp.csr_matrix(sp.diags(1.0 / np.maximum(degree, 1.0)) @ graph @ aggregates)
     member = sp.csr_matrix(aggregates + (share >= OVERLAP).astype(float))
-    alone = np.flatnonzero(np.diff(member.indptr) == 0)     # unaggregated: isolated nodes
-    alone = sp.csr_matrix((np.ones(len(alone)), (alone, np.arange(len(alone)))),
-                          shape=(member.shape[0], len(alone)))
-    member = sp.csc_matrix(sp.hstack([member, alone]))
-    member = member[:, np.diff(member.indptr) > 0]
+    alone = np.diff(member.indptr) == 0                     # unaggregated: isolated nodes
+    member = sp.csc_matrix(sp.hstack([member, sp.eye(len(alone), format="csc")[:, alone]]))
+    member = member[:, np.diff(member.indptr) > 0]          # no empty aggregate
     member.sort_indices()
     index = A.indices.dtype
     subdomain = (blocksize * member.indices[:, None] + np.arange(blocksize)).ravel()

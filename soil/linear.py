@@ -99,10 +99,11 @@ class Layout:
         P-wave modulus ``K + 4G/3`` of the initial state [kPa].
     smoother : str
         How the Krylov back-end's AMG V-cycles smooth their finest level:
-        ``"gauss_seidel"`` (symmetric point Gauss-Seidel) or ``"schwarz"`` (multiplicative
-        Schwarz on overlapping aggregates, :func:`soil.krylov._schwarz`: dearer per
-        sweep, it pays for MLS's wide stencils and for fem-th through a softening peak).
-        The discretisation chooses (``python docs/krylov_study.py --smoother``).
+        ``"gauss_seidel"`` (symmetric Gauss-Seidel on node blocks) or ``"schwarz"``
+        (multiplicative Schwarz on overlapping aggregates, :func:`soil.krylov._schwarz`:
+        dearer per sweep, it pays for MLS's wide stencils and for fem-th through a
+        softening peak). The discretisation chooses (``python docs/krylov_study.py
+        --smoother``); any other value is a ValueError.
     """
 
     groups: np.ndarray = None
@@ -112,6 +113,12 @@ class Layout:
     mass: object = None
     modulus: float = 1.0
     smoother: str = "gauss_seidel"
+
+    def __post_init__(self):
+        """Reject an unknown :attr:`smoother`."""
+        if self.smoother not in ("gauss_seidel", "schwarz"):
+            raise ValueError(f"Layout.smoother={self.smoother!r}: use 'gauss_seidel' or "
+                             "'schwarz'")
 
     @property
     def complete(self):
