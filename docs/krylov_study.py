@@ -158,14 +158,13 @@ def overlaps(nodes, shares):
 
     K, layout = first_tangent(nodes, krylov=True)
     b = np.random.default_rng(0).standard_normal(K.shape[0])
-    kept, schwarz = [], soil.krylov._schwarz
+    kept, build = [], soil.krylov._Schwarz.__init__
 
-    def measured(*args):
-        settings = schwarz(*args)
-        kept.append(settings["inv_subblock"].nbytes)
-        return settings
+    def measured(self, *args):
+        build(self, *args)
+        kept.append(self.inverses.nbytes)
 
-    soil.krylov._schwarz, default = measured, soil.krylov.OVERLAP
+    soil.krylov._Schwarz.__init__, default = measured, soil.krylov.OVERLAP
     try:
         for share in shares:
             soil.krylov.OVERLAP, kept[:] = share, []
@@ -177,7 +176,7 @@ def overlaps(nodes, shares):
                   f"{sum(kept) / 1e6:.0f} MB, FGMRES {solver.iterations} iterations, "
                   f"{time.perf_counter() - tic - built:.1f} s", flush=True)
     finally:
-        soil.krylov._schwarz, soil.krylov.OVERLAP = schwarz, default
+        soil.krylov._Schwarz.__init__, soil.krylov.OVERLAP = build, default
 
 
 def smoothers(sizes):

@@ -55,11 +55,13 @@ as the Newton tolerance does.
 
 from contextlib import contextmanager
 
+import numba
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from soil.errors import ConvergenceError, InputError
+from soil.threads import parts, run
 
 #: FGMRES restart length (Krylov vectors kept).
 RESTART = 60
@@ -74,6 +76,9 @@ MAX_COARSE = 500
 #: An unknown joins the Schwarz subdomain of an aggregate when at least this share of
 #: its matrix neighbours (nodes, for node blocks) belongs to the aggregate.
 OVERLAP = 0.25
+#: Runs of consecutive Schwarz subdomains whose inner ones are solved side by side
+#: (:class:`_Schwarz`); a constant, so that the sweep is the same on any machine.
+GROUPS = 2
 #: The smoother of every level Schwarz does not smooth: symmetric Gauss-Seidel on the
 #: matrix's blocks (nodes; pyamg's default).
 GAUSS_SEIDEL = ("block_gauss_seidel", {"sweep": "symmetric"})
@@ -221,7 +226,6 @@ def _amg(A, smoother, modes=None, blocksize=1):
     node blocks of ``blocksize``), its finest level smoothed by :func:`_schwarz` if
     ``smoother`` is ``"schwarz"``, every other level by symmetric Gauss-Seidel."""
     import pyamg
-    from pyamg.relaxation.smoothing import change_smoothers
 
     matrix = sp.bsr_matrix(A, blocksize=(blocksize,) * 2) if blocksize > 1 else sp.csr_matrix(A)
     with _seeded():
@@ -230,10 +234,9 @@ def _amg(A, smoother, modes=None, blocksize=1):
                                                postsmoother=GAUSS_SEIDEL)
     if smoother == "schwarz" and len(ml.levels) > 1:   # one level: a coarse solve alone
         fine = ml.levels[0]
-        kept = _schwarz(sp.csr_matrix(A), fine.C, fine.AggOp, blocksize)
-        change_smoothers(ml, [("schwarz", dict(kept, sweep="forward")), GAUSS_SEIDEL],
-                         [("schwarz", dict(kept, sweep="backward")), GAUSS_SEIDEL])
-        fine.A = fine.Acsr                  # the smoother's CSR copy serves the cycle too
+        fine.A = sp.csr_matrix(A)           # the smoother's matrix serves the cycle too
+        schwarz = _Schwarz(fine.A, *_subdomains(fine.C, fine.AggOp, blocksize))
+        fine.presmoother, fine.postsmoother = schwarz.forward, schwarz.backward
     for level in ml.levels:                 # what keep=True held for the smoother's setup
         for name in ("C", "AggOp", "T", "P0"):
             level.__dict__.pop(name, None)
@@ -254,14 +257,18 @@ def _seeded():
         np.random.set_state(state)
 
 
-def _schwarz(A, strength, aggregates, blocksize):
-    """pyamg's ``schwarz`` smoother settings (sweep to be chosen) on the overlapping
-    subdomains of ``aggregates`` (nodes x aggregates): an aggregate's nodes and every
-    node with at least :data:`OVERLAP` of its ``strength`` neighbours in it, and each
-    node of no aggregate (no strong neighbour) alone; each subdomain's block of ``A``
-    inverted, by size in batches."""
-    from pyamg import amg_core
+def _subdomains(strength, aggregates, blocksize):
+    """The overlapping Schwarz subdomains of ``aggregates`` (nodes x aggregates): an
+    aggregate's nodes and every node with at least :data:`OVERLAP` of its ``strength``
+    neighbours in it, and each node of no aggregate (no strong neighbour) alone.
 
+    Returns
+    -------
+    subdomain : ndarray of int32
+        The unknowns (``blocksize`` per node) of every subdomain in turn, each sorted.
+    pointer : ndarray of int64, shape (subdomains + 1,)
+        Subdomain ``d`` is ``subdomain[pointer[d]:pointer[d + 1]]``.
+    """
     graph = sp.csr_matrix(strength != 0, dtype=float)       # a copy: pyamg's C stays
     aggregates = sp.csr_matrix(aggregates, dtype=float)
     degree = np.asarray(graph.sum(axis=1)).ravel()
@@ -271,21 +278,179 @@ def _schwarz(A, strength, aggregates, blocksize):
     member = sp.csc_matrix(sp.hstack([member, sp.eye(len(alone), format="csc")[:, alone]]))
     member = member[:, np.diff(member.indptr) > 0]          # no empty aggregate
     member.sort_indices()
-    index = A.indices.dtype
     subdomain = (blocksize * member.indices[:, None] + np.arange(blocksize)).ravel()
-    subdomain, pointer = subdomain.astype(index), (blocksize * member.indptr).astype(index)
-    sizes = np.diff(pointer)
-    block_pointer = np.concatenate([[0], np.cumsum(sizes.astype(np.int64) ** 2)])
-    blocks = np.zeros(block_pointer[-1])
-    block_pointer = block_pointer.astype(index)
-    A.sort_indices()
-    amg_core.extract_subblocks(A.indptr, A.indices, A.data, blocks, block_pointer,
-                               subdomain, pointer, len(sizes), A.shape[0])
-    for size in np.unique(sizes):
-        at = block_pointer[:-1][sizes == size][:, None] + np.arange(size * size)
-        blocks[at] = np.linalg.inv(blocks[at].reshape(-1, size, size)).reshape(len(at), -1)
-    return {"subdomain": subdomain, "subdomain_ptr": pointer, "inv_subblock": blocks,
-            "inv_subblock_ptr": block_pointer}
+    return subdomain.astype(np.int32), blocksize * member.indptr.astype(np.int64)
+
+
+class _Schwarz:
+    """Multiplicative Schwarz on overlapping subdomains of a CSR matrix ``A``: in turn,
+    each subdomain's residual rows solved exactly by the kept inverse of its block of
+    ``A`` (single precision: half the memory and traffic of the largest array of the
+    preconditioner, and a smoother needs no more), the correction added at once.
+
+    The order runs on every core (:mod:`soil.threads`) and is the same on any number of
+    them: the subdomains are split into :data:`GROUPS` runs of consecutive ones; those
+    that touch no other run's (neither reads what the other writes) come first, each
+    run's in its own order and the runs side by side; the others follow colour by colour
+    (:func:`_greedy`; no two of a colour touch), each colour's side by side. The backward
+    sweep is the forward one reversed.
+
+    Parameters
+    ----------
+    A : scipy.sparse.csr_matrix, shape (n, n)
+    subdomain, pointer : ndarray
+        The subdomains, as :func:`_subdomains` returns them.
+
+    Attributes
+    ----------
+    subdomain, pointer : ndarray
+        The subdomains in sweep order.
+    runs : list of list of (int, int)
+        The forward sweep: stages in turn, each a list of subdomain ranges that are
+        solved side by side.
+    inverses, inverse_pointer : ndarray
+        Subdomain ``d``'s block inverse, row-major, is
+        ``inverses[inverse_pointer[d]:inverse_pointer[d + 1]]`` (float32).
+
+    Examples
+    --------
+    Two subdomains sharing the middle unknown of a 3 x 3 matrix; a forward sweep from
+    zero solves the first exactly, then the second against the updated residual:
+
+    >>> A = sp.csr_matrix([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 2.0]])
+    >>> smoother = _Schwarz(A, np.array([0, 1, 1, 2], np.int32), np.array([0, 2, 4]))
+    >>> x = np.zeros(3)
+    >>> smoother.forward(A, x, np.ones(3))
+    >>> np.round(x, 6).tolist()
+    [1.0, 1.666667, 1.333333]
+    """
+
+    def __init__(self, A, subdomain, pointer):
+        A.sort_indices()
+        order, self.runs = _sweep_order(A, subdomain, pointer)
+        sizes = np.diff(pointer)[order]
+        self.pointer = np.concatenate([[0], np.cumsum(sizes)])
+        self.subdomain = subdomain[np.repeat(pointer[order] - self.pointer[:-1], sizes)
+                                   + np.arange(self.pointer[-1])].view(np.uint32)
+        self.inverse_pointer = np.concatenate([[0], np.cumsum(sizes**2)])
+        self.inverses = np.empty(self.inverse_pointer[-1], np.float32)
+        for size in np.unique(sizes):                       # in batches of one size
+            at = np.flatnonzero(sizes == size)
+            rows = self.subdomain[self.pointer[at][:, None] + np.arange(size)].ravel()
+            inverse = np.linalg.inv(_blocks(A, rows, size)).reshape(len(at), -1)
+            self.inverses[self.inverse_pointer[at][:, None] + np.arange(size * size)] = inverse
+
+    def forward(self, A, x, b):
+        """One sweep, ``x`` updated in place (pyamg's smoother signature)."""
+        self._sweep(A, x, b, self.runs, False)
+
+    def backward(self, A, x, b):
+        """The forward sweep reversed."""
+        self._sweep(A, x, b, self.runs[::-1], True)
+
+    def _sweep(self, A, x, b, stages, reverse):
+        x, b = x.reshape(-1), np.ravel(b)
+        columns = A.indices.view(np.uint32 if A.indices.itemsize == 4 else np.uint64)
+
+        def solve(lo, hi):
+            _solve_subdomains(A.indptr, columns, A.data, x, b, self.subdomain, self.pointer,
+                              self.inverses, self.inverse_pointer, lo, hi, reverse)
+
+        for ranges in stages:
+            run(solve, ranges)
+
+
+def _sweep_order(A, subdomain, pointer):
+    """The subdomains' sweep order of :class:`_Schwarz` and its stages (lists of
+    subdomain ranges, in that order, solved side by side)."""
+    n, count = A.shape[0], len(pointer) - 1
+    member = sp.csc_matrix((np.ones(len(subdomain), np.float32), subdomain, pointer),
+                           shape=(n, count))
+    reach = sp.csr_matrix((np.ones(A.nnz, np.float32), A.indices, A.indptr), shape=A.shape)
+    touch = sp.csr_matrix(member.T @ (reach @ member) + member.T @ member)
+    touch = sp.csr_matrix(touch + touch.T)                  # d reads what e writes, or e d's
+    runs = max(min(GROUPS, count), 1)
+    group = np.arange(count) * runs // max(count, 1)
+    rows = np.repeat(np.arange(count), np.diff(touch.indptr))
+    shared = np.zeros(count, bool)
+    shared[rows[group[touch.indices] != group[rows]]] = True
+    inner, outer = np.flatnonzero(~shared), np.flatnonzero(shared)
+    between = sp.csr_matrix(touch[outer][:, outer])
+    colour = _greedy(between.indptr, between.indices)
+    outer = outer[np.argsort(colour, kind="stable")]
+    ends = np.cumsum(np.concatenate([np.bincount(group[inner], minlength=runs),
+                                     np.bincount(colour)])).tolist()
+    starts = [0, *ends[:-1]]
+    stages = [list(zip(starts[:runs], ends[:runs]))]
+    stages += [parts(lo, hi) for lo, hi in zip(starts[runs:], ends[runs:])]
+    return np.concatenate([inner, outer]), stages
+
+
+def _blocks(A, rows, size):
+    """The dense blocks ``A[s][:, s]`` (m, size, size) of the m subdomains ``s`` of
+    ``size`` unknowns each, ``rows`` their unknowns in turn."""
+    from pyamg import amg_core
+
+    count, index = len(rows) // size, A.indices.dtype
+    local = np.arange(count + 1) * size
+    blocks = np.zeros(count * size * size)
+    amg_core.extract_subblocks(A.indptr, A.indices, A.data, blocks, (local * size).astype(index),
+                               rows.astype(index), local.astype(index), count, A.shape[0])
+    return blocks.reshape(count, size, size)
+
+
+@numba.njit(cache=True)
+def _greedy(indptr, indices):
+    """Greedy colouring of a graph's vertices in order: each takes the smallest colour
+    none of its coloured neighbours has."""
+    count = len(indptr) - 1
+    colour, seen = np.full(count, -1), np.full(count + 1, -1)
+    for v in range(count):
+        for k in range(indptr[v], indptr[v + 1]):
+            if colour[indices[k]] >= 0:
+                seen[colour[indices[k]]] = v
+        c = 0
+        while seen[c] == v:
+            c += 1
+        colour[v] = c
+    return colour
+
+
+@numba.njit(cache=True, nogil=True)
+def _solve_subdomains(indptr, indices, data, x, b, subdomain, pointer, inverses,
+                      inverse_pointer, lo, hi, reverse):
+    """Subdomains ``lo:hi`` solved in turn (``reverse``: from the last): each one's
+    residual rows multiplied by its inverse and added to ``x``."""
+    r = np.empty(np.max(pointer[lo + 1:hi + 1] - pointer[lo:hi]) if hi > lo else 0)
+    for k in range(lo, hi):
+        d = hi - 1 - (k - lo) if reverse else k
+        rows = subdomain[pointer[d]:pointer[d + 1]]
+        for i in range(len(rows)):
+            start, stop = indptr[rows[i]], indptr[rows[i] + 1]
+            r[i] = b[rows[i]] - _dot(data[start:stop], indices[start:stop], x)
+        _block_solve(inverses[inverse_pointer[d]:inverse_pointer[d + 1]], r, rows, x)
+
+
+@numba.njit(cache=True, nogil=True)
+def _dot(values, columns, x):
+    """``sum values * x[columns]``: a sparse row times ``x``, summed in order."""
+    s = 0.0
+    for k in range(len(values)):
+        s += values[k] * x[columns[k]]
+    return s
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _block_solve(inverse, r, rows, x):
+    """``x[rows] += inverse @ r[:n]``, the inverse (n x n, row-major) in single
+    precision, sums in double (reassociated, so they vectorise)."""
+    n = len(rows)
+    for i in range(n):
+        line = inverse[i * n:(i + 1) * n]
+        s = 0.0
+        for j in range(n):
+            s += line[j] * r[j]
+        x[rows[i]] += s
 
 
 def _amg_schur(A, B, C, D, mass, smoother):
