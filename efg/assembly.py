@@ -27,6 +27,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from soil.kinematics import GRADIENT_TO_VOIGT
+from soil.threads import parts, run
 from soil.weakform import Coefficients
 
 
@@ -137,9 +138,14 @@ def scatter(pattern, test, trial, coeff, out=None):
     phi = test.phi
     order = sp.csr_matrix((np.arange(phi.nnz, dtype=np.int64), phi.indices, phi.indptr),
                           shape=phi.shape).tocsc()  # test entries grouped by node
-    _scatter(pattern.indptr, pattern.indices, order.indptr, order.indices, order.data,
-             components(test), trial.phi.indptr, trial.phi.indices, components(trial),
-             np.ascontiguousarray(coeff.values), fs, tf, tg, j_start, column, out)
+    values, a_val, b_val = np.ascontiguousarray(coeff.values), components(test), components(trial)
+
+    def rows(lo, hi):
+        _scatter(pattern.indptr, pattern.indices, order.indptr, order.indices, order.data,
+                 a_val, trial.phi.indptr, trial.phi.indices, b_val, values, fs, tf, tg,
+                 j_start, column, out, pattern.shape[1], lo, hi)
+
+    run(rows, parts(0, pattern.shape[0]))
     return out
 
 
@@ -173,20 +179,22 @@ def _kernel_terms(terms):
     return tf.copy(), tg.copy(), np.searchsorted(tj, np.arange(4)), column
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _scatter(p_ptr, p_idx, a_colptr, a_points, a_entry, a_val, b_ptr, b_idx, b_val, values,
-             fs, tf, tg, j_start, column, out):
-    """Row by row of the pattern (the test node): a column map replaces any search. The
-    test side is contracted once per (node, point) into the kernel terms (f, g, j), sorted
-    by trial slot j (``j_start``), from the coefficient ``values`` of their test slots
-    (``column``); every trial node of the point then adds ``t * S_b[j]`` to a contiguous
-    row buffer (trial node, term), which is added to ``out`` once per row."""
+             fs, tf, tg, j_start, column, out, n_cols, lo, hi):
+    """Rows ``lo:hi`` of the pattern (test nodes), one by one; each row writes only its
+    own entries of ``out``, so row ranges run side by side (:mod:`soil.threads`). A
+    column map replaces any search. The test side is contracted once per (node, point)
+    into the kernel terms (f, g, j), sorted by trial slot j (``j_start``), from the
+    coefficient ``values`` of their test slots (``column``); every trial node of the
+    point then adds ``t * S_b[j]`` to a contiguous row buffer (trial node, term), which is
+    added to ``out`` once per row."""
     nnz, terms = len(p_idx), len(tf)
-    position = np.empty(p_idx.max() + 1 if nnz else 0, dtype=np.int64)
-    widest = np.max(p_ptr[1:] - p_ptr[:-1]) if nnz else 0
+    position = np.empty(n_cols, dtype=np.int64)
+    widest = np.max(p_ptr[lo + 1:hi + 1] - p_ptr[lo:hi]) if hi > lo else 0
     row_sum = np.zeros(widest * terms)
     t = np.empty(terms)
-    for row in range(len(p_ptr) - 1):
+    for row in range(lo, hi):
         start, length = p_ptr[row], p_ptr[row + 1] - p_ptr[row]
         for k in range(start, p_ptr[row + 1]):
             position[p_idx[k]] = k - start

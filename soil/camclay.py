@@ -17,7 +17,7 @@ compression positive. Units are those of the case (p'0 sets the stress unit).
 
 Each equation has one home, a numba function of scalars: :func:`yield_function` (the
 surface and its derivatives), :func:`surface_size`, :func:`hardening` and
-:func:`mean_volume`. The return mapping (:func:`_return_mapping`, a Newton iteration per
+:func:`mean_volume`. The return mapping (:func:`return_mapping`, a Newton iteration per
 point) and the methods of :class:`CamClay` call them. numba caches their machine code in
 ``soil/__pycache__``; it is compiled again when this file changes.
 """
@@ -33,6 +33,7 @@ from soil.errors import ConvergenceError, InputError, require
 from soil.kinematics import (DEVIATORIC, IDENTITY, deviator, double_dot, hughes_winget,
                              invariants)
 from soil.material import Material
+from soil.threads import parts, run
 
 MODELS = ("original", "modified")
 
@@ -49,7 +50,7 @@ ELASTIC, SMOOTH, VERTEX = 0, 1, 2
 
 #: numba options of every function here: division by zero gives inf or nan (a diverging
 #: iteration ends in a status, not an exception inside numba).
-jit = numba.njit(cache=True, error_model="numpy")
+jit = numba.njit(cache=True, error_model="numpy", nogil=True)
 
 
 @dataclass(frozen=True)
@@ -253,8 +254,9 @@ class CamClay(Material):
         """Integrate one step on every point: implicit return mapping in (p', q).
 
         The stress is rotated (Hughes-Winget) and the elastic trial formed on whole arrays;
-        the numba kernel :func:`_return_mapping` then solves each point's local problem in
-        (ln p', q, ln p'c, dgamma) by Newton's method and forms its consistent tangent.
+        :func:`return_mapping` (a numba kernel, on parts of the points side by side) then
+        solves each point's local problem in (ln p', q, ln p'c, dgamma) by Newton's method
+        and forms its consistent tangent.
 
         Parameters
         ----------
@@ -296,7 +298,7 @@ class CamClay(Material):
         _, G = self.moduli(p_n, v_n)
         s_tr = deviator(stress) + 2 * G[:, None] * (dstrain @ DEVIATORIC.T)
         q_tr = np.sqrt(1.5 * double_dot(s_tr, s_tr))
-        new_stress, pc, tangent, status = _return_mapping(
+        new_stress, pc, tangent, status = return_mapping(
             self.constants, s_tr, q_tr, p_n, pc_n, v_n, dev, G, float(tol), int(max_iter))
         _raise_on(status, max_iter)
         return new_stress, {"pc": pc, "v": v_n * np.exp(dev)}, tangent
@@ -445,9 +447,10 @@ def _hardenings(c, v, out):
 
 
 # -- the return mapping: one point after another ---------------------------------------------
-@jit
-def _return_mapping(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter):
-    """Return mapping and consistent tangent of every point (numba kernel).
+def return_mapping(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter, ranges=None):
+    """Return mapping and consistent tangent of every point: the numba kernel
+    :func:`_return_mapping` on parts of the points side by side (:mod:`soil.threads`;
+    each point's result is the same on any number of them).
 
     Parameters
     ----------
@@ -462,6 +465,8 @@ def _return_mapping(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter):
         Tolerance on the scaled local residual.
     max_iter : int
         Newton iterations per solve.
+    ranges : list of (int, int), optional
+        The parts (:func:`soil.threads.parts` of the points by default).
 
     Returns
     -------
@@ -473,13 +478,23 @@ def _return_mapping(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter):
         that did not converge are undefined.
     """
     n = len(p_n)
-    stress, pc, tangent = np.empty((n, 4)), np.empty(n), np.empty((n, 4, 4))
-    status = np.empty(n, np.int8)
+    out = np.empty((n, 4)), np.empty(n), np.empty((n, 4, 4)), np.empty(n, np.int8)
+    run(lambda lo, hi: _return_mapping(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter,
+                                       lo, hi, *out),
+        parts(0, n) if ranges is None else ranges)
+    return out
+
+
+@jit
+def _return_mapping(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter, lo, hi, stress,
+                    pc, tangent, status):
+    """:func:`return_mapping` of the points ``lo:hi``, one after another, into the rows
+    ``lo:hi`` of ``stress``, ``pc``, ``tangent`` and ``status`` (numba kernel; the GIL
+    released)."""
     x, work = np.empty(4), _workspace()
-    for i in range(n):
+    for i in range(lo, hi):
         status[i], pc[i] = _point(c, s_tr[i], q_tr[i], p_n[i], pc_n[i], v_n[i], dev[i],
                                   G[i], tol, max_iter, x, work, stress[i], tangent[i])
-    return stress, pc, tangent, status
 
 
 @jit

@@ -12,25 +12,24 @@ increments up to 2 %: elastic, hardening and softening returns, the original mod
 vertex), then times ``CamClay.update`` (numba kernel) and ``camclay_oracle.update`` (numpy),
 interleaved, best of ``--repeat``, in one process, so that the ratio is what counts on a
 shared machine (wall-clock and CPU time). It also times the numpy part of ``update``
-(rotation, elastic trial) and the kernel alone, serial and with ``prange`` over two
-chunks per thread (``parallel=True``, a variant defined here from the package's own
-per-point function), and reports the largest differences of kernel and oracle: stress
-over the start-of-step p', tangent over its Frobenius norm, p'c relative.
+(rotation, elastic trial) and the kernel alone, on one thread and on the pool of
+:mod:`soil.threads` (checking that both give the same arrays), and reports the largest
+differences of kernel and oracle: stress over the start-of-step p', tangent over its
+Frobenius norm, p'c relative.
 
 ``--first-call`` runs a fresh interpreter twice, timing the import and the first
 ``update``: with an empty numba cache (compilation), then with the cache that run wrote
 (loading).
 
-Measured on the 2-core development machine while it ran other jobs (load 7 to 11), 6e5
-points, numba 0.68.1, numpy 2.4: ``update`` took 1.24 s of CPU (original) and 1.33 s
-(modified) against the oracle's 8.96 s and 7.03 s, ratios 7.2 and 5.3 (wall-clock 8.0
-and 5.4; two earlier runs gave 7.8 and 9.2 for the original, 6.6 and 4.6 for the
-modified); of the 1.24 s, 0.81 s is the kernel and 0.27 s the numpy rotation and trial.
-Largest differences: stress 2.5e-11 p'_n, tangent 1.5e-9 of its norm (original; 3.6e-11
-modified), p'c 1.9e-11. ``prange`` on two threads gave serial / prange wall-clock ratios
-of 0.84, 0.87 and 0.90 (original) and 0.94, 1.19 and 1.54 (modified) in three runs: no
-gain that one can rely on while the cores are shared, so the package's kernel is serial.
-First call: 8.0 s of CPU to compile with an empty cache, 0.6 s to load from it.
+Measured on the idle 2-core development machine, 6e5 points, numba 0.68.1, numpy 2.4.6,
+best of 5: ``update`` took 0.35 s wall-clock (0.60 s CPU) for the original model and 0.36 s
+(0.59 s) for the modified one against the oracle's 3.04 s and 2.41 s, wall-clock ratios
+8.7 and 6.7 (CPU 5.3 and 4.2); the kernel alone took 0.44 s on one thread and 0.22 s on
+two (1.99 and 1.91 times faster), the numpy part 0.09 s. Largest differences: stress
+2.5e-11 p'_n, tangent 1.5e-9 of its norm (original; 3.6e-11 modified), p'c 1.9e-11.
+(While the cores were shared with other jobs, numba's ``prange`` had given no gain one
+could rely on: ratios 0.84 to 1.54.) First call: 8.0 s of CPU to compile with an empty
+cache, 0.6 s to load from it.
 """
 
 import argparse
@@ -41,7 +40,6 @@ import tempfile
 import time
 from pathlib import Path
 
-import numba
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -49,6 +47,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 import camclay_oracle as oracle  # noqa: E402
 from soil import camclay  # noqa: E402
 from soil.camclay import CamClay  # noqa: E402
+from soil.threads import threads  # noqa: E402
 from soil.kinematics import (DEVIATORIC, deviator, double_dot, hughes_winget,  # noqa: E402
                              invariants)
 
@@ -56,22 +55,6 @@ from soil.kinematics import (DEVIATORIC, deviator, double_dot, hughes_winget,  #
 def table1(model):
     """The paper's Table 1 clay."""
     return CamClay(lam=0.11, kappa=0.04, M=1.42, nu=0.333, e0=0.83, p0=3.0, model=model)
-
-
-@numba.njit(parallel=True, error_model="numpy")
-def return_mapping_parallel(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter):
-    """``camclay._return_mapping`` with ``prange`` over chunks, each with its own scratch."""
-    n = len(p_n)
-    stress, pc, tangent = np.empty((n, 4)), np.empty(n), np.empty((n, 4, 4))
-    status = np.empty(n, np.int8)
-    chunks = 2 * numba.get_num_threads()
-    for k in numba.prange(chunks):
-        x, work = np.empty(4), camclay._workspace()
-        for i in range(k * n // chunks, (k + 1) * n // chunks):
-            status[i], pc[i] = camclay._point(c, s_tr[i], q_tr[i], p_n[i], pc_n[i], v_n[i],
-                                              dev[i], G[i], tol, max_iter, x, work,
-                                              stress[i], tangent[i])
-    return stress, pc, tangent, status
 
 
 def kernel_arguments(clay, stress, state, dstrain, dspin):
@@ -123,20 +106,19 @@ def compare(model, n, repeat, seed):
     points = oracle.admissible_points(clay, np.random.default_rng(seed).random(
         (n, oracle.UNIFORMS)))
     args = kernel_arguments(clay, *points)
-    camclay._return_mapping(*(a[:10] if isinstance(a, np.ndarray) else a for a in args))
-    return_mapping_parallel(*(a[:10] if isinstance(a, np.ndarray) else a for a in args))
+    camclay.return_mapping(*(a[:10] if isinstance(a, np.ndarray) else a for a in args))
     wall, cpu, (kernel, numpy, _, serial, parallel) = best(
         [lambda: clay.update(*points), lambda: oracle.update(clay, *points),
-         lambda: kernel_arguments(clay, *points), lambda: camclay._return_mapping(*args),
-         lambda: return_mapping_parallel(*args)], repeat)
+         lambda: kernel_arguments(clay, *points),
+         lambda: camclay.return_mapping(*args, ranges=[(0, n)]),
+         lambda: camclay.return_mapping(*args)], repeat)
     assert all(np.array_equal(serial[k], parallel[k]) for k in range(4))
-    print(f"{model}, {n} points, best of {repeat}, {numba.get_num_threads()} numba threads; "
-          "seconds wall (cpu)")
+    print(f"{model}, {n} points, best of {repeat}, {threads()} threads; seconds wall (cpu)")
     for k, label in enumerate(["update (numba kernel)", "numpy oracle", "  numpy part of update",
-                               "  kernel, serial", "  kernel, prange"]):
+                               "  kernel, one thread", "  kernel, threads"]):
         print(f"  {label:24s} {wall[k]:7.3f} ({cpu[k]:7.3f})")
     print(f"  oracle / update: wall {wall[1] / wall[0]:.1f}, cpu {cpu[1] / cpu[0]:.1f}; "
-          f"serial / prange wall {wall[3] / wall[4]:.2f}")
+          f"one thread / threads wall {wall[3] / wall[4]:.2f}")
     differences = agreement(points, kernel, numpy)
     print("  largest differences:", ", ".join(f"{k} {v:.2e}" for k, v in differences.items()))
     print("  returns:", kinds(points, numpy))
