@@ -35,18 +35,19 @@ consistent one: ``python docs/krylov_study.py --schur``).
 
 The V-cycles smooth by symmetric Gauss-Seidel on node blocks (pyamg's default), except
 where the discretisation asks for Schwarz (``Layout.smoother``): then the finest level is
-smoothed by multiplicative Schwarz on overlapping aggregates (:func:`_schwarz`): the first
-coarsening's aggregates, each grown by every unknown with at least :data:`OVERLAP` of its
-matrix neighbours in it, solved exactly in turn (their inverses kept), forward before the
-coarse correction and backward after it (the cycle stays symmetric at half the cost of
-symmetric sweeps on both sides). Gauss-Seidel smooths a wide MLS stencil poorly (77
-FGMRES iterations against 19 at 10^4 nodes, the Schur complement solved exactly), and
-P1 and Q2 elements well enough that Schwarz's dearer sweeps do not pay (``python
-docs/krylov_study.py --smoother``). Unknowns of neither field (a rigid plate's
-settlement, the mean-pressure multiplier) are eliminated exactly through the
-preconditioner (a dense Schur complement of their few rows). The AMG setup runs under a
-fixed random seed (:func:`_seeded`), so a preconditioner, and a run's iteration counts,
-repeat.
+smoothed by multiplicative Schwarz on overlapping aggregates (:func:`_subdomains`,
+:class:`_Schwarz`): the first coarsening's aggregates, each grown by every unknown with
+at least :data:`OVERLAP` of its matrix neighbours in it, solved exactly in turn (their
+inverses kept, in single precision), forward before the coarse correction and backward
+after it (the cycle stays symmetric at half the cost of symmetric sweeps on both sides),
+in an order whose independent subdomains are solved side by side on every core.
+Gauss-Seidel smooths a wide MLS stencil poorly (77 FGMRES iterations against 19 at 10^4
+nodes, the Schur complement solved exactly), and P1 and Q2 elements well enough that
+Schwarz's dearer sweeps do not pay (``python docs/krylov_study.py --smoother``).
+Unknowns of neither field (a rigid plate's settlement, the mean-pressure multiplier) are
+eliminated exactly through the preconditioner (a dense Schur complement of their few
+rows). The AMG setup runs under a fixed random seed (:func:`_seeded`), so a
+preconditioner, and a run's iteration counts, repeat.
 
 Rows are scaled by the residual scales of :class:`soil.coupling.Scales` (force or volume per
 unit thickness), so the relative residual FGMRES stops on weighs equilibrium and continuity
@@ -223,7 +224,7 @@ def _rigid_modes(locations, fields):
 
 def _amg(A, smoother, modes=None, blocksize=1):
     """One V-cycle of smoothed-aggregation AMG on ``A`` (near-null ``modes``; unknowns in
-    node blocks of ``blocksize``), its finest level smoothed by :func:`_schwarz` if
+    node blocks of ``blocksize``), its finest level smoothed by :class:`_Schwarz` if
     ``smoother`` is ``"schwarz"``, every other level by symmetric Gauss-Seidel."""
     import pyamg
 

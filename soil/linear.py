@@ -100,7 +100,7 @@ class Layout:
     smoother : str
         How the Krylov back-end's AMG V-cycles smooth their finest level:
         ``"gauss_seidel"`` (symmetric Gauss-Seidel on node blocks) or ``"schwarz"``
-        (multiplicative Schwarz on overlapping aggregates, :func:`soil.krylov._schwarz`:
+        (multiplicative Schwarz on overlapping aggregates, :class:`soil.krylov._Schwarz`:
         dearer per sweep, it pays for MLS's wide stencils and for fem-th through a
         softening peak). The discretisation chooses (``python docs/krylov_study.py
         --smoother``); any other value is a ValueError.
