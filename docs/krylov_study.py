@@ -47,6 +47,11 @@ on the first tangent of the bench step as the Krylov sizes run it: the precondit
 build time and kept inverses [MB], and FGMRES on a random right-hand side to 1e-8:
 iterations and time.
 
+``python docs/krylov_study.py --threads [nodes ...]`` (default 1e5; a few minutes): one
+Krylov step of the bench case with ``SOILWATER_THREADS=1`` and with every core
+(:mod:`soil.threads`): step, assembly, solve and constitutive times, Newton and FGMRES
+iterations.
+
 ``python docs/krylov_study.py --schur [nodes ...]`` (default 3e3 1e4; about 5 minutes):
 which block of the Krylov preconditioner limits it. On the first tangent of the bench
 step as the Krylov sizes run it, the displacement-pressure rows scaled and ordered as
@@ -217,6 +222,25 @@ def whole_runs():
 
 class _Captured(Exception):
     """The first tangent of a step, and its layout."""
+
+
+def threads(sizes):
+    """One Krylov step per size on one thread and on every core."""
+    import os
+
+    from soil.threads import CORES
+
+    for nodes in sizes:
+        for count in ("1", str(CORES)):
+            os.environ["SOILWATER_THREADS"] = count
+            row, status = in_child(one_step, "efg", nodes, "cam-clay", "krylov",
+                                   timeout=LIMIT)
+            keys = ("step", "assembly", "solve", "constitutive", "iterations",
+                    "linear_iterations")
+            print(f"{nodes:8d} threads {count} {status}",
+                  {k: round(row[k], 2) for k in keys} if status == "ok" else row,
+                  flush=True)
+    os.environ.pop("SOILWATER_THREADS")
 
 
 def first_tangent(nodes, krylov=False):
@@ -453,6 +477,8 @@ if __name__ == "__main__":
         overlaps(int(arguments[0]) if arguments else 30_000, arguments[1:] or [0.25, 0.5, 1.01])
     elif sys.argv[1:2] == ["--smoother"]:
         smoothers([int(float(n)) for n in sys.argv[2:]] or [10_000, 30_000])
+    elif sys.argv[1:2] == ["--threads"]:
+        threads([int(float(n)) for n in sys.argv[2:]] or [100_000])
     elif sys.argv[1:2] == ["--schur"]:
         schur([int(float(n)) for n in sys.argv[2:]] or [3_000, 10_000])
     elif sys.argv[1:2] == ["--symmetric"]:

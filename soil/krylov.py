@@ -38,7 +38,7 @@ where the discretisation asks for Schwarz (``Layout.smoother``): then the finest
 smoothed by multiplicative Schwarz on overlapping aggregates (:func:`_subdomains`,
 :class:`_Schwarz`): the first coarsening's aggregates, each grown by every unknown with
 at least :data:`OVERLAP` of its matrix neighbours in it, solved exactly in turn (their
-inverses kept, in single precision), forward before the coarse correction and backward
+inverses kept), forward before the coarse correction and backward
 after it (the cycle stays symmetric at half the cost of symmetric sweeps on both sides),
 in an order whose independent subdomains are solved side by side on every core.
 Gauss-Seidel smooths a wide MLS stencil poorly (77 FGMRES iterations against 19 at 10^4
@@ -80,6 +80,15 @@ OVERLAP = 0.25
 #: Runs of consecutive Schwarz subdomains whose inner ones are solved side by side
 #: (:class:`_Schwarz`); a constant, so that the sweep is the same on any machine.
 GROUPS = 2
+#: Unknowns (summed over the subdomains) from which a Schwarz sweep is split into
+#: :data:`GROUPS` runs; a smaller one keeps the subdomains' own order, one after another:
+#: there the split gains little time, and its order smooths worse (fem-th's unconfined
+#: compression, about 3 x 10^4 unknowns: 588 Newton iterations, 77003 FGMRES iterations
+#: and 7 cut-backs against 470, 44544 and 1).
+SPLIT_FROM = 100_000
+#: Unknowns (summed over its subdomains) from which a stage of a Schwarz sweep is solved
+#: side by side; a smaller one costs less than handing it to the threads.
+SIDE_BY_SIDE_FROM = 10_000
 #: The smoother of every level Schwarz does not smooth: symmetric Gauss-Seidel on the
 #: matrix's blocks (nodes; pyamg's default).
 GAUSS_SEIDEL = ("block_gauss_seidel", {"sweep": "symmetric"})
@@ -286,15 +295,17 @@ def _subdomains(strength, aggregates, blocksize):
 class _Schwarz:
     """Multiplicative Schwarz on overlapping subdomains of a CSR matrix ``A``: in turn,
     each subdomain's residual rows solved exactly by the kept inverse of its block of
-    ``A`` (single precision: half the memory and traffic of the largest array of the
-    preconditioner, and a smoother needs no more), the correction added at once.
+    ``A``, the correction added at once. The inverses stay in double precision: in
+    single precision (half the preconditioner's largest array) fem-th's unconfined
+    compression took 645 Newton iterations, 76870 FGMRES iterations and 10 cut-backs
+    through its softening peak instead of 470, 44544 and 1.
 
-    The order runs on every core (:mod:`soil.threads`) and is the same on any number of
-    them: the subdomains are split into :data:`GROUPS` runs of consecutive ones; those
-    that touch no other run's (neither reads what the other writes) come first, each
-    run's in its own order and the runs side by side; the others follow colour by colour
-    (:func:`_greedy`; no two of a colour touch), each colour's side by side. The backward
-    sweep is the forward one reversed.
+    From :data:`SPLIT_FROM` unknowns the order runs on every core (:mod:`soil.threads`)
+    and is the same on any number of them: the subdomains are split into :data:`GROUPS`
+    runs of consecutive ones; those that touch no other run's (neither reads what the
+    other writes) come first, each run's in its own order and the runs side by side; the
+    others follow colour by colour (:func:`_greedy`; no two of a colour touch), each
+    colour's side by side. The backward sweep is the forward one reversed.
 
     Parameters
     ----------
@@ -309,9 +320,13 @@ class _Schwarz:
     runs : list of list of (int, int)
         The forward sweep: stages in turn, each a list of subdomain ranges that are
         solved side by side.
+    calls : list of list of (int, int)
+        The stages as the sweep calls them: a stage of at least :data:`SIDE_BY_SIDE_FROM`
+        unknowns keeps its ranges, solved side by side; consecutive smaller ones are
+        merged into one range, solved in the calling thread in the same order.
     inverses, inverse_pointer : ndarray
         Subdomain ``d``'s block inverse, row-major, is
-        ``inverses[inverse_pointer[d]:inverse_pointer[d + 1]]`` (float32).
+        ``inverses[inverse_pointer[d]:inverse_pointer[d + 1]]``.
 
     Examples
     --------
@@ -331,10 +346,11 @@ class _Schwarz:
         order, self.runs = _sweep_order(A, subdomain, pointer)
         sizes = np.diff(pointer)[order]
         self.pointer = np.concatenate([[0], np.cumsum(sizes)])
+        self.calls = _calls(self.runs, self.pointer)
         self.subdomain = subdomain[np.repeat(pointer[order] - self.pointer[:-1], sizes)
                                    + np.arange(self.pointer[-1])].view(np.uint32)
         self.inverse_pointer = np.concatenate([[0], np.cumsum(sizes**2)])
-        self.inverses = np.empty(self.inverse_pointer[-1], np.float32)
+        self.inverses = np.empty(self.inverse_pointer[-1])
         for size in np.unique(sizes):                       # in batches of one size
             at = np.flatnonzero(sizes == size)
             rows = self.subdomain[self.pointer[at][:, None] + np.arange(size)].ravel()
@@ -343,11 +359,11 @@ class _Schwarz:
 
     def forward(self, A, x, b):
         """One sweep, ``x`` updated in place (pyamg's smoother signature)."""
-        self._sweep(A, x, b, self.runs, False)
+        self._sweep(A, x, b, self.calls, False)
 
     def backward(self, A, x, b):
         """The forward sweep reversed."""
-        self._sweep(A, x, b, self.runs[::-1], True)
+        self._sweep(A, x, b, self.calls[::-1], True)
 
     def _sweep(self, A, x, b, stages, reverse):
         x, b = x.reshape(-1), np.ravel(b)
@@ -370,7 +386,7 @@ def _sweep_order(A, subdomain, pointer):
     reach = sp.csr_matrix((np.ones(A.nnz, np.float32), A.indices, A.indptr), shape=A.shape)
     touch = sp.csr_matrix(member.T @ (reach @ member) + member.T @ member)
     touch = sp.csr_matrix(touch + touch.T)                  # d reads what e writes, or e d's
-    runs = max(min(GROUPS, count), 1)
+    runs = max(min(GROUPS if pointer[-1] >= SPLIT_FROM else 1, count), 1)
     group = np.arange(count) * runs // max(count, 1)
     rows = np.repeat(np.arange(count), np.diff(touch.indptr))
     shared = np.zeros(count, bool)
@@ -385,6 +401,21 @@ def _sweep_order(A, subdomain, pointer):
     stages = [list(zip(starts[:runs], ends[:runs]))]
     stages += [parts(lo, hi) for lo, hi in zip(starts[runs:], ends[runs:])]
     return np.concatenate([inner, outer]), stages
+
+
+def _calls(stages, pointer):
+    """:attr:`_Schwarz.calls` of the ``stages`` (subdomains ``d`` holding the unknowns
+    ``pointer[d]:pointer[d + 1]``)."""
+    calls = []
+    for ranges in stages:
+        lo, hi = ranges[0][0], ranges[-1][1]
+        if len(ranges) > 1 and pointer[hi] - pointer[lo] >= SIDE_BY_SIDE_FROM:
+            calls.append(ranges)
+        elif calls and len(calls[-1]) == 1:
+            calls[-1] = [(calls[-1][0][0], hi)]
+        else:
+            calls.append([(lo, hi)])
+    return calls
 
 
 def _blocks(A, rows, size):
@@ -443,8 +474,8 @@ def _dot(values, columns, x):
 
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def _block_solve(inverse, r, rows, x):
-    """``x[rows] += inverse @ r[:n]``, the inverse (n x n, row-major) in single
-    precision, sums in double (reassociated, so they vectorise)."""
+    """``x[rows] += inverse @ r[:n]``, the inverse n x n, row-major (its sums
+    reassociated, so they vectorise)."""
     n = len(rows)
     for i in range(n):
         line = inverse[i * n:(i + 1) * n]
