@@ -230,6 +230,7 @@ def threads(sizes):
 
     from soil.threads import CORES
 
+    saved = os.environ.get("SOILWATER_THREADS")
     for nodes in sizes:
         for count in ("1", str(CORES)):
             os.environ["SOILWATER_THREADS"] = count
@@ -241,6 +242,8 @@ def threads(sizes):
                   {k: round(row[k], 2) for k in keys} if status == "ok" else row,
                   flush=True)
     os.environ.pop("SOILWATER_THREADS")
+    if saved is not None:
+        os.environ["SOILWATER_THREADS"] = saved
 
 
 def first_tangent(nodes, krylov=False):

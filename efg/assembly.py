@@ -138,7 +138,8 @@ def scatter(pattern, test, trial, coeff, out=None):
     phi = test.phi
     order = sp.csr_matrix((np.arange(phi.nnz, dtype=np.int64), phi.indices, phi.indptr),
                           shape=phi.shape).tocsc()  # test entries grouped by node
-    values, a_val, b_val = np.ascontiguousarray(coeff.values), components(test), components(trial)
+    values = np.ascontiguousarray(coeff.values)
+    a_val, b_val = components(test), components(trial)
 
     def rows(lo, hi):
         _scatter(pattern.indptr, pattern.indices, order.indptr, order.indices, order.data,

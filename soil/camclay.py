@@ -447,7 +447,7 @@ def _hardenings(c, v, out):
 
 
 # -- the return mapping: one point after another ---------------------------------------------
-def return_mapping(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter, ranges=None):
+def return_mapping(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter):
     """Return mapping and consistent tangent of every point: the numba kernel
     :func:`_return_mapping` on parts of the points side by side (:mod:`soil.threads`;
     each point's result is the same on any number of them).
@@ -465,8 +465,6 @@ def return_mapping(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter, ranges=
         Tolerance on the scaled local residual.
     max_iter : int
         Newton iterations per solve.
-    ranges : list of (int, int), optional
-        The parts (:func:`soil.threads.parts` of the points by default).
 
     Returns
     -------
@@ -481,7 +479,7 @@ def return_mapping(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter, ranges=
     out = np.empty((n, 4)), np.empty(n), np.empty((n, 4, 4)), np.empty(n, np.int8)
     run(lambda lo, hi: _return_mapping(c, s_tr, q_tr, p_n, pc_n, v_n, dev, G, tol, max_iter,
                                        lo, hi, *out),
-        parts(0, n) if ranges is None else ranges)
+        parts(0, n))
     return out
 
 

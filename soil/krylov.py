@@ -38,9 +38,9 @@ where the discretisation asks for Schwarz (``Layout.smoother``): then the finest
 smoothed by multiplicative Schwarz on overlapping aggregates (:func:`_subdomains`,
 :class:`_Schwarz`): the first coarsening's aggregates, each grown by every unknown with
 at least :data:`OVERLAP` of its matrix neighbours in it, solved exactly in turn (their
-inverses kept), forward before the coarse correction and backward
-after it (the cycle stays symmetric at half the cost of symmetric sweeps on both sides),
-in an order whose independent subdomains are solved side by side on every core.
+inverses kept), forward before the coarse correction and backward after it (the cycle
+stays symmetric at half the cost of symmetric sweeps on both sides), in an order whose
+independent subdomains are solved side by side on every core.
 Gauss-Seidel smooths a wide MLS stencil poorly (77 FGMRES iterations against 19 at 10^4
 nodes, the Schur complement solved exactly), and P1 and Q2 elements well enough that
 Schwarz's dearer sweeps do not pay (``python docs/krylov_study.py --smoother``).
@@ -355,7 +355,8 @@ class _Schwarz:
             at = np.flatnonzero(sizes == size)
             rows = self.subdomain[self.pointer[at][:, None] + np.arange(size)].ravel()
             inverse = np.linalg.inv(_blocks(A, rows, size)).reshape(len(at), -1)
-            self.inverses[self.inverse_pointer[at][:, None] + np.arange(size * size)] = inverse
+            at = self.inverse_pointer[at][:, None] + np.arange(size * size)
+            self.inverses[at] = inverse
 
     def forward(self, A, x, b):
         """One sweep, ``x`` updated in place (pyamg's smoother signature)."""
@@ -426,8 +427,9 @@ def _blocks(A, rows, size):
     count, index = len(rows) // size, A.indices.dtype
     local = np.arange(count + 1) * size
     blocks = np.zeros(count * size * size)
-    amg_core.extract_subblocks(A.indptr, A.indices, A.data, blocks, (local * size).astype(index),
-                               rows.astype(index), local.astype(index), count, A.shape[0])
+    amg_core.extract_subblocks(A.indptr, A.indices, A.data, blocks,
+                               (local * size).astype(index), rows.astype(index),
+                               local.astype(index), count, A.shape[0])
     return blocks.reshape(count, size, size)
 
 

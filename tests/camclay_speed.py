@@ -57,6 +57,19 @@ def table1(model):
     return CamClay(lam=0.11, kappa=0.04, M=1.42, nu=0.333, e0=0.83, p0=3.0, model=model)
 
 
+def one_thread(fn, *args):
+    """``fn(*args)`` with ``SOILWATER_THREADS=1`` (the caller's setting restored)."""
+    saved = os.environ.get("SOILWATER_THREADS")
+    os.environ["SOILWATER_THREADS"] = "1"
+    try:
+        return fn(*args)
+    finally:
+        if saved is None:
+            del os.environ["SOILWATER_THREADS"]
+        else:
+            os.environ["SOILWATER_THREADS"] = saved
+
+
 def kernel_arguments(clay, stress, state, dstrain, dspin):
     """The arguments ``CamClay.update`` hands to the kernel (its numpy part)."""
     stress = hughes_winget(stress, dspin)
@@ -110,7 +123,7 @@ def compare(model, n, repeat, seed):
     wall, cpu, (kernel, numpy, _, serial, parallel) = best(
         [lambda: clay.update(*points), lambda: oracle.update(clay, *points),
          lambda: kernel_arguments(clay, *points),
-         lambda: camclay.return_mapping(*args, ranges=[(0, n)]),
+         lambda: one_thread(camclay.return_mapping, *args),
          lambda: camclay.return_mapping(*args)], repeat)
     assert all(np.array_equal(serial[k], parallel[k]) for k in range(4))
     print(f"{model}, {n} points, best of {repeat}, {threads()} threads; seconds wall (cpu)")
