@@ -47,6 +47,13 @@ on the first tangent of the bench step as the Krylov sizes run it: the precondit
 build time and kept inverses [MB], and FGMRES on a random right-hand side to 1e-8:
 iterations and time.
 
+``python docs/krylov_study.py --strength [theta ...]`` (default 0 0.01 0.02; about 15
+minutes): per strength-of-connection threshold of the AMG hierarchies
+(``soil.linear.Layout.strength``, set for every discretisation alike), one Krylov step
+of the bench case at 3e4 and 1e5 nodes (step and solve time, Newton and FGMRES
+iterations, peak memory) and whole unconfined-compression runs of fem-th and
+fem-p1p1-stab on Krylov (time, Newton and FGMRES iterations, cut-backs, or the failure).
+
 ``python docs/krylov_study.py --threads [nodes ...]`` (default 1e5; a few minutes): one
 Krylov step of the bench case with ``SOILWATER_THREADS=1`` and with every core
 (:mod:`soil.threads`): step, assembly, solve and constitutive times, Newton and FGMRES
@@ -140,14 +147,15 @@ def runs():
 SMOOTHED = ("efg", "fem-p1p1-stab", "fem-q2q1", "fem-th")
 
 
-def _smoothed(smoother, fn, *args):
-    """``fn(*args)`` with every Krylov preconditioner smoothed by ``smoother``."""
+def _laid_out(changes, fn, *args):
+    """``fn(*args)`` with the ``changes`` (:class:`soil.linear.Layout` fields) made to
+    the layout of every Krylov preconditioner."""
     import soil.krylov
 
     build = soil.krylov.Krylov.__init__
 
     def forced(self, K, layout):
-        build(self, K, dataclasses.replace(layout, smoother=smoother))
+        build(self, K, dataclasses.replace(layout, **changes))
 
     soil.krylov.Krylov.__init__ = forced
     try:
@@ -184,13 +192,42 @@ def overlaps(nodes, shares):
         soil.krylov._Schwarz.__init__, soil.krylov.OVERLAP = build, default
 
 
+def strengths(thetas):
+    """Bench steps and whole FEM runs on Krylov per strength threshold."""
+    import fem_reference.solver
+
+    for theta in thetas:
+        for nodes in (30_000, 100_000):
+            row, status = in_child(_laid_out, {"strength": theta}, one_step, "efg", nodes,
+                                   "cam-clay", "krylov", timeout=LIMIT)
+            keys = ("step", "solve", "iterations", "linear_iterations", "peak_mb")
+            print(f"theta {theta} {nodes:8d} {status}",
+                  {k: round(row[k], 1) for k in keys} if status == "ok" else row,
+                  flush=True)
+        for method in ("fem-th", "fem-p1p1-stab"):
+            tic = time.perf_counter()
+            with linear_solver("krylov"):
+                try:
+                    s = _laid_out({"strength": theta}, fem_reference.solver.solve,
+                                  load_case("unconfined-compression"), method,
+                                  False).summary
+                except ConvergenceError as err:
+                    print(f"theta {theta} unconfined-compression {method}: failed: {err}",
+                          flush=True)
+                    continue
+            print(f"theta {theta} unconfined-compression {method}: "
+                  f"{time.perf_counter() - tic:.0f} s, Newton {s['newton_iterations']}, "
+                  f"FGMRES {s['linear_iterations']}, cut-backs {s['cutbacks']}",
+                  flush=True)
+
+
 def smoothers(sizes):
     """One Krylov step per method, size and smoother; :func:`whole_runs`."""
     for nodes in sizes:
         for method in SMOOTHED:
             for smoother in ("gauss_seidel", "schwarz"):
-                row, status = in_child(_smoothed, smoother, one_step, method, nodes,
-                                       "cam-clay", "krylov", timeout=LIMIT)
+                row, status = in_child(_laid_out, {"smoother": smoother}, one_step, method,
+                                       nodes, "cam-clay", "krylov", timeout=LIMIT)
                 keys = ("step", "solve", "iterations", "linear_iterations")
                 print(f"{nodes:8d} {method:14s} {smoother:12s} {status}",
                       {k: round(row[k], 1) for k in keys} if status == "ok" else row,
@@ -209,8 +246,8 @@ def whole_runs():
             tic = time.perf_counter()
             with linear_solver("krylov"):
                 try:
-                    s = _smoothed(smoother, fem_reference.solver.solve, case, method,
-                                  False).summary
+                    s = _laid_out({"smoother": smoother}, fem_reference.solver.solve, case,
+                                  method, False).summary
                     print(f"unconfined-compression {method} {smoother}: "
                           f"{time.perf_counter() - tic:.0f} s, Newton "
                           f"{s['newton_iterations']}, FGMRES {s['linear_iterations']}, "
@@ -412,7 +449,7 @@ def schur(sizes):
     import scipy.sparse.linalg as spla
     from pyamg.krylov import fgmres
 
-    from soil.krylov import RESTART, Krylov, _amg, _rigid_modes
+    from soil.krylov import RESTART, Krylov, _amg, _permuted, _rigid_modes
 
     for nodes in sizes:
         K, layout = first_tangent(nodes, krylov=True)
@@ -420,7 +457,7 @@ def schur(sizes):
         nu, n_p = precondition.sizes
         order = precondition.order[:nu + n_p]
         row = precondition.row[:nu + n_p]
-        scaled = sp.csr_matrix(sp.diags(row) @ sp.csr_matrix(K)[order][:, order])
+        scaled = sp.csr_matrix(sp.diags(row) @ _permuted(sp.csr_matrix(K), order))
         A, B = scaled[:nu, :nu], scaled[:nu, nu:]
         C, D = scaled[nu:, :nu], scaled[nu:, nu:]
         s = -precondition.sign_p
@@ -434,16 +471,17 @@ def schur(sizes):
 
         modes = _rigid_modes(layout.locations[order[:nu]], layout.fields[order[:nu]])
         displacements = {
-            "AMG, Gauss-Seidel": _amg(A, "gauss_seidel", modes, 2),
+            "AMG, Gauss-Seidel": _amg(A, "gauss_seidel", layout.strength, modes, 2),
             "AMG, Schwarz": precondition.amg_u,
             "exact": exact(A)}
         pressures = {"fixed-stress lumped, exact": exact(D - s * lumped),
                      "SIMPLE, exact": exact(D - C @ sp.diags(1 / A.diagonal()) @ B),
                      "fixed-stress, AMG Gauss-Seidel": (
-                         lambda r, t=-s, cycle=_amg(-s * consistent, "gauss_seidel"):
+                         lambda r, t=-s,
+                         cycle=_amg(-s * consistent, "gauss_seidel", layout.strength):
                          t * cycle(r)),
                      "fixed-stress, AMG Schwarz": (
-                         lambda r, t=-s, cycle=_amg(-s * consistent, "schwarz"):
+                         lambda r, t=-s, cycle=_amg(-s * consistent, "schwarz", layout.strength):
                          t * cycle(r)),
                      "fixed-stress, exact": exact(consistent)}
         if n_p <= 4000:
@@ -480,6 +518,8 @@ if __name__ == "__main__":
         overlaps(int(arguments[0]) if arguments else 30_000, arguments[1:] or [0.25, 0.5, 1.01])
     elif sys.argv[1:2] == ["--smoother"]:
         smoothers([int(float(n)) for n in sys.argv[2:]] or [10_000, 30_000])
+    elif sys.argv[1:2] == ["--strength"]:
+        strengths([float(t) for t in sys.argv[2:]] or [0.0, 0.01, 0.02])
     elif sys.argv[1:2] == ["--threads"]:
         threads([int(float(n)) for n in sys.argv[2:]] or [100_000])
     elif sys.argv[1:2] == ["--schur"]:

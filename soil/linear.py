@@ -104,6 +104,12 @@ class Layout:
         dearer per sweep, it pays for MLS's wide stencils and for fem-th through a
         softening peak). The discretisation chooses (``python docs/krylov_study.py
         --smoother``); any other value is a ValueError.
+    strength : float
+        The Krylov back-end's strength-of-connection threshold ``theta`` of its AMG
+        hierarchies, ``0 <= theta < 1``: a coupling counts (aggregates and Schwarz
+        subdomains grow along it) where ``|a_ij| >= theta sqrt(|a_ii a_jj|)``. 0 (every
+        coupling; pyamg's default) unless the discretisation asks for more
+        (``python docs/krylov_study.py --strength``).
     """
 
     groups: np.ndarray = None
@@ -113,12 +119,15 @@ class Layout:
     mass: object = None
     modulus: float = 1.0
     smoother: str = "gauss_seidel"
+    strength: float = 0.0
 
     def __post_init__(self):
-        """Reject an unknown :attr:`smoother`."""
+        """Reject an unknown :attr:`smoother` or a :attr:`strength` outside [0, 1)."""
         if self.smoother not in ("gauss_seidel", "schwarz"):
             raise ValueError(f"Layout.smoother={self.smoother!r}: use 'gauss_seidel' or "
                              "'schwarz'")
+        if not 0.0 <= self.strength < 1.0:
+            raise ValueError(f"Layout.strength={self.strength!r}: use a threshold in [0, 1)")
 
     @property
     def complete(self):

@@ -107,7 +107,8 @@ def test_bordered_unknowns_are_eliminated(monkeypatch):
 
 def test_schwarz_subdomains_cover_every_unknown_and_keep_their_inverses():
     """The overlapping subdomains of a smoothed-aggregation hierarchy hold every unknown
-    (some in two), each sorted, and the kept block inverses are those of ``A``'s blocks."""
+    (some in two), each sorted, the kept block inverses are those of ``A``'s blocks, and
+    a sweep is multiplicative Schwarz on ``A`` (from the kept rows)."""
     import pyamg
 
     K, layout = biot(n=20)
@@ -124,6 +125,12 @@ def test_schwarz_subdomains_cover_every_unknown_and_keep_their_inverses():
         block = A[dofs][:, dofs].toarray()
         inverse = inv[inv_ptr[i]:inv_ptr[i + 1]].reshape(len(dofs), len(dofs))
         assert np.allclose(inverse @ block, np.eye(len(dofs)), atol=1e-10)
+    b, swept, expected = np.random.default_rng(1).standard_normal(800), np.zeros(800), np.zeros(800)
+    smoother.forward(A, swept, b)
+    for i in range(len(ptr) - 1):
+        dofs = sub[ptr[i]:ptr[i + 1]]
+        expected[dofs] += np.linalg.solve(A[dofs][:, dofs].toarray(), (b - A @ expected)[dofs])
+    assert np.allclose(swept, expected, rtol=1e-10, atol=1e-10 * np.abs(expected).max())
 
 
 def test_schwarz_solves_side_by_side_only_subdomains_that_do_not_touch(monkeypatch):
@@ -171,7 +178,7 @@ def test_schwarz_keeps_unknowns_without_strong_neighbours():
         sub, _ = _subdomains(ml.levels[0].C, ml.levels[0].AggOp, 1)
         assert set(sub) == set(range(M.shape[0]))
     b = np.arange(50.0)
-    assert np.allclose(_amg(M, "schwarz")(b), b / diagonal.diagonal(), rtol=1e-12)
+    assert np.allclose(_amg(M, "schwarz", 0.0)(b), b / diagonal.diagonal(), rtol=1e-12)
 
 
 def test_efg_corrections_take_few_iterations():
