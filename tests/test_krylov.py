@@ -192,6 +192,13 @@ def test_efg_corrections_take_few_iterations():
     assert 0 < s["linear_iterations"] <= 20 * s["newton_iterations"]
 
 
+@pytest.mark.parametrize("field, value", [("smoother", "jacobi"), ("strength", 1.0),
+                                          ("strength", -0.01)])
+def test_layout_rejects_unknown_smoothers_and_thresholds(field, value):
+    with pytest.raises(ValueError, match=f"Layout.{field}="):
+        Layout(**{field: value})
+
+
 def test_krylov_needs_a_described_system(monkeypatch):
     monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "krylov")
     K, _ = biot()
