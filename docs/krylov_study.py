@@ -263,24 +263,18 @@ class _Captured(Exception):
 
 def threads(sizes):
     """One Krylov step per size on one thread and on every core."""
-    import os
+    from soil.threads import CORES, using
 
-    from soil.threads import CORES
-
-    saved = os.environ.get("SOILWATER_THREADS")
     for nodes in sizes:
-        for count in ("1", str(CORES)):
-            os.environ["SOILWATER_THREADS"] = count
-            row, status = in_child(one_step, "efg", nodes, "cam-clay", "krylov",
-                                   timeout=LIMIT)
+        for count in (1, CORES):
+            with using(count):
+                row, status = in_child(one_step, "efg", nodes, "cam-clay", "krylov",
+                                       timeout=LIMIT)
             keys = ("step", "assembly", "solve", "constitutive", "iterations",
                     "linear_iterations")
             print(f"{nodes:8d} threads {count} {status}",
                   {k: round(row[k], 2) for k in keys} if status == "ok" else row,
                   flush=True)
-    os.environ.pop("SOILWATER_THREADS")
-    if saved is not None:
-        os.environ["SOILWATER_THREADS"] = saved
 
 
 def first_tangent(nodes, krylov=False):

@@ -313,10 +313,10 @@ class _Schwarz:
     ``A``, the correction added at once. The smoother keeps its own copy of each
     subdomain's rows of ``A``, in sweep order (a row in two subdomains twice): read
     straight through, their residuals cost half of what the rows gathered from ``A``
-    cost. The inverses stay in double precision: in
-    single precision (half the preconditioner's largest array) fem-th's unconfined
-    compression took 645 Newton iterations, 76870 FGMRES iterations and 10 cut-backs
-    through its softening peak instead of 470, 44544 and 1.
+    cost. The inverses stay in double precision: in single precision (half the
+    preconditioner's largest array) fem-th's unconfined compression took 645 Newton
+    iterations, 76870 FGMRES iterations and 10 cut-backs through its softening peak
+    instead of 470, 44544 and 1.
 
     From :data:`SPLIT_FROM` unknowns the order runs on every core (:mod:`soil.threads`)
     and is the same on any number of them: the subdomains are split into :data:`GROUPS`

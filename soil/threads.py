@@ -10,6 +10,7 @@ and size (a forked child makes its own: the parent's threads do not survive a fo
 
 import os
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from functools import cache
 
 import numpy as np
@@ -30,6 +31,28 @@ def threads():
         raise InputError(f"SOILWATER_THREADS={choice!r} is not a number of threads; set a "
                          f"whole number from 1, or unset it to use every core ({CORES})")
     return int(choice)
+
+
+@contextmanager
+def using(count):
+    """``SOILWATER_THREADS=count`` inside the block, the caller's setting restored after
+    (for measurements that compare thread counts in one process).
+
+    Examples
+    --------
+    >>> with using(1):
+    ...     threads()
+    1
+    """
+    saved = os.environ.get("SOILWATER_THREADS")
+    os.environ["SOILWATER_THREADS"] = str(count)
+    try:
+        yield
+    finally:
+        if saved is None:
+            del os.environ["SOILWATER_THREADS"]
+        else:
+            os.environ["SOILWATER_THREADS"] = saved
 
 
 def parts(start, stop, count=None):

@@ -47,7 +47,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 import camclay_oracle as oracle  # noqa: E402
 from soil import camclay  # noqa: E402
 from soil.camclay import CamClay  # noqa: E402
-from soil.threads import threads  # noqa: E402
+from soil.threads import threads, using  # noqa: E402
 from soil.kinematics import (DEVIATORIC, deviator, double_dot, hughes_winget,  # noqa: E402
                              invariants)
 
@@ -58,16 +58,9 @@ def table1(model):
 
 
 def one_thread(fn, *args):
-    """``fn(*args)`` with ``SOILWATER_THREADS=1`` (the caller's setting restored)."""
-    saved = os.environ.get("SOILWATER_THREADS")
-    os.environ["SOILWATER_THREADS"] = "1"
-    try:
+    """``fn(*args)`` on one thread (:func:`soil.threads.using`)."""
+    with using(1):
         return fn(*args)
-    finally:
-        if saved is None:
-            del os.environ["SOILWATER_THREADS"]
-        else:
-            os.environ["SOILWATER_THREADS"] = saved
 
 
 def kernel_arguments(clay, stress, state, dstrain, dspin):
