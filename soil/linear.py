@@ -43,6 +43,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from soil.environment import setting
 from soil.errors import ConvergenceError, InputError
 from soil.krylov import Krylov
 
@@ -200,16 +201,9 @@ def linear_solver(name):
     if name is None:
         yield
         return
-    previous = os.environ.get("SOILWATER_LINEAR_SOLVER")
-    os.environ["SOILWATER_LINEAR_SOLVER"] = name
-    try:
+    with setting("SOILWATER_LINEAR_SOLVER", name):
         backend()
         yield
-    finally:
-        if previous is None:
-            del os.environ["SOILWATER_LINEAR_SOLVER"]
-        else:
-            os.environ["SOILWATER_LINEAR_SOLVER"] = previous
 
 
 def must_refactorise(lu, residual, previous):

@@ -10,11 +10,11 @@ and size (a forked child makes its own: the parent's threads do not survive a fo
 
 import os
 from concurrent.futures import ThreadPoolExecutor
-from contextlib import contextmanager
 from functools import cache
 
 import numpy as np
 
+from soil.environment import setting
 from soil.errors import InputError
 
 #: The cores this process may run on.
@@ -33,10 +33,9 @@ def threads():
     return int(choice)
 
 
-@contextmanager
 def using(count):
-    """``SOILWATER_THREADS=count`` inside the block, the caller's setting restored after
-    (for measurements that compare thread counts in one process).
+    """``SOILWATER_THREADS=count`` inside a ``with`` block (for measurements that compare
+    thread counts in one process).
 
     Examples
     --------
@@ -44,15 +43,7 @@ def using(count):
     ...     threads()
     1
     """
-    saved = os.environ.get("SOILWATER_THREADS")
-    os.environ["SOILWATER_THREADS"] = str(count)
-    try:
-        yield
-    finally:
-        if saved is None:
-            del os.environ["SOILWATER_THREADS"]
-        else:
-            os.environ["SOILWATER_THREADS"] = saved
+    return setting("SOILWATER_THREADS", count)
 
 
 def parts(start, stop, count=None):
