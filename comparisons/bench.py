@@ -12,14 +12,16 @@ Three measurements, all on this machine in one command (never timed tests):
    step of 0.2 % axial strain) at about 10^3, 3 x 10^3, ..., 10^6 nodes (:data:`SIZES`)
    for ``efg``, ``fem-p1p1``, ``fem-th`` and ``fem-p1p1-stab`` on the same vertices, with
    the Cam-clay skeleton of the case and with a linear elastic one. The rule that bounds
-   the whole run (57 minutes on 2 cores, the four large runs at most 4 x 900 s of it):
+   the whole run (25 minutes on 2 cores, the four large runs at most 4 x 900 s of it):
    from 3 x 10^5 nodes (:data:`LARGE_FROM`) only ``efg`` and ``fem-p1p1-stab`` with
    Cam-clay run, and a run is stopped after 900 s there, 240 s below
    (:func:`time_limit`). The linear solver is chosen by size (:func:`solver_for`): the direct
    one, PARDISO where ``pypardiso`` is installed, else SuperLU, below 3 x 10^5 nodes
    (:data:`KRYLOV_FROM`), and ``soil.linear.linear_solver("krylov")`` from there, where
    EFG runs with Nitsche's conditions and the perturbation stabilisation, as the Krylov
-   back-end needs (:func:`compression`; the ``efg`` column says which). The
+   back-end needs (:func:`compression`; the ``efg`` column says which). From 10^4 nodes
+   (:data:`BOTH_FROM`) EFG and ``fem-p1p1-stab`` with Cam-clay also run on Krylov below
+   3 x 10^5, so issue 17's targets take each on its faster solver, measured. The
    solvers' own phase timers (:data:`soil.coupling.TIMERS`) give shape functions (FEM:
    basis construction), background cells (FEM: moving the mesh), assembly of the
    tangent, linear solve (analysis, factorisations and back-substitutions), constitutive
@@ -72,6 +74,10 @@ LARGE_MATERIALS = ("cam-clay",)
 #: From this many (requested) nodes the tangents are solved by the iterative back-end
 #: ``soil.linear.linear_solver("krylov")``; below, by the direct one (:func:`direct`).
 KRYLOV_FROM = 300_000
+#: From this many (requested) nodes up to :data:`KRYLOV_FROM`, :data:`LARGE_METHODS` with
+#: :data:`LARGE_MATERIALS` run on both back-ends: issue 17's targets take each method on
+#: its faster one, measured, and the Krylov path's growth spans 10^4 to 10^6.
+BOTH_FROM = 10_000
 #: Seconds after which one run below :data:`LARGE_FROM` nodes is stopped (recorded, not
 #: timed); :data:`LARGE_TIME_LIMIT` from there.
 TIME_LIMIT = 240.0
@@ -192,16 +198,29 @@ def usable(solver):
 def plan(sizes=SIZES, methods=METHODS, materials=MATERIALS):
     """The runs of :func:`steps`: ``(nodes, material, method, solver, limit)`` per run,
     sizes in the given order; from :data:`LARGE_FROM` nodes only :data:`LARGE_METHODS`
-    with :data:`LARGE_MATERIALS`.
+    with :data:`LARGE_MATERIALS`, which from :data:`BOTH_FROM` to :data:`KRYLOV_FROM`
+    run on the direct back-end and then on ``"krylov"``.
 
     Examples
     --------
     >>> [run[:4] for run in plan([1_000_000], ("efg", "fem-th"))]
     [(1000000, 'cam-clay', 'efg', 'krylov')]
+    >>> [run[3] for run in plan([BOTH_FROM], ("efg",), ("cam-clay",))][1:]
+    ['krylov']
     """
-    return [(nodes, material, method, solver_for(nodes), time_limit(nodes))
-            for nodes in sizes for material in materials for method in methods
-            if nodes < LARGE_FROM or (method in LARGE_METHODS and material in LARGE_MATERIALS)]
+    runs = []
+    for nodes in sizes:
+        for material in materials:
+            for method in methods:
+                large = method in LARGE_METHODS and material in LARGE_MATERIALS
+                if nodes >= LARGE_FROM and not large:
+                    continue
+                solvers = [solver_for(nodes)]
+                if large and BOTH_FROM <= nodes < KRYLOV_FROM:
+                    solvers.append("krylov")
+                runs += [(nodes, material, method, solver, time_limit(nodes))
+                         for solver in solvers]
+    return runs
 
 
 #: Columns of a row of :func:`steps`, in order.
@@ -342,10 +361,13 @@ def steps(sizes=SIZES, methods=METHODS, materials=MATERIALS, limit=None, progres
     pandas.DataFrame
         One row per run, the :data:`COLUMNS` (``limit_s``: the run's time limit [s]).
     """
+    runs = plan(sizes, methods, materials)
     for method in methods:                       # compile numba kernels, load MKL
         one_step(method, 200, "cam-clay", direct())
+    if any(run[3] == "krylov" for run in runs) and usable("krylov"):
+        one_step(methods[0], 200, "cam-clay", "krylov")          # load pyamg
     rows = []
-    for nodes, material, method, solver, seconds in plan(sizes, methods, materials):
+    for nodes, material, method, solver, seconds in runs:
         seconds = seconds if limit is None else limit
         if usable(solver):
             row, status = in_child(one_step, method, nodes, material, solver,
@@ -539,12 +561,32 @@ def verdict(measured, limit):
                     np.where(measured <= limit, "yes", "**no**"))
 
 
-def pick(table, method, material, nodes):
+def pick(table, method, material, nodes, solver=None):
     """The row of ``method`` and ``material`` at the size ``nodes`` asked for (its grid's
-    count within 10 %), or None if there was no such run."""
+    count within 10 %), on ``solver`` (None: the first such run), or None if there was
+    no such run."""
     rows = table[(table.method == method) & (table.material == material)
                  & np.isclose(table.nodes, nodes, rtol=0.1)]
+    if solver is not None:
+        rows = rows[rows.solver == solver]
     return rows.iloc[0] if len(rows) else None
+
+
+def fastest(rows):
+    """The completed row of ``rows`` with the shortest step, else the first row (its
+    status says why); None for no rows.
+
+    Examples
+    --------
+    >>> rows = pd.DataFrame({"solver": ["pardiso", "krylov"], "status": ["ok", "ok"],
+    ...                      "step": [40.0, 35.0]})
+    >>> fastest(rows).solver
+    'krylov'
+    """
+    if not len(rows):
+        return None
+    done = rows[rows.status == "ok"]
+    return done.loc[done.step.idxmin()] if len(done) else rows.iloc[0]
 
 
 def at(x, xs, ys):
@@ -556,14 +598,16 @@ def at(x, xs, ys):
 
 
 def ratios(table):
-    """EFG / FEM per phase at equal nodes (same grid), for each material and size."""
+    """EFG / FEM per phase at equal nodes (same grid) on the same linear solver, for each
+    material, size and solver."""
     rows = []
-    for (material, nodes), group in table.groupby(["material", "nodes"], sort=False):
+    for (material, nodes, solver), group in table.groupby(["material", "nodes", "solver"],
+                                                          sort=False):
         by = group.set_index("method")
         for fem in METHODS[1:]:
             if "efg" not in by.index or fem not in by.index:
                 continue
-            row = {"material": material, "nodes": nodes, "against": fem}
+            row = {"material": material, "nodes": nodes, "solver": solver, "against": fem}
             for phase in PHASES:
                 row[phase] = by.loc["efg", phase] / by.loc[fem, phase]
             rows.append(row)
@@ -590,7 +634,8 @@ def targets(table, shapes, growth):
     """Issue 7's speed targets: measured value, target and verdict, one row each.
 
     A "whole step / fem-p1p1" row whose fem-p1p1 run was stopped compares with its time
-    limit: an upper bound of the ratio. Growth exponents are of the direct solver's runs.
+    limit: an upper bound of the ratio; EFG is taken on fem-p1p1's solver. Assembly per
+    tangent and growth exponents are of the direct solver's runs.
     """
     rows = []
     ok = table[table.status == "ok"]
@@ -600,9 +645,10 @@ def targets(table, shapes, growth):
             rows.append((f"shape functions / CellBasis({basis}), same points",
                          f"{int(largest.nodes)} nodes, {int(largest.points)} points",
                          largest.efg_s / largest[f"{basis}_s"], 1.5))
+    factorised = ok[(ok.solver != "krylov") & (ok.factorisations > 0)]
     for material in MATERIALS:
-        efg = ok[(ok.method == "efg") & (ok.material == material) & (ok.factorisations > 0)]
-        th = ok[(ok.method == "fem-th") & (ok.material == material) & (ok.factorisations > 0)]
+        efg = factorised[(factorised.method == "efg") & (factorised.material == material)]
+        th = factorised[(factorised.method == "fem-th") & (factorised.material == material)]
         for _, row in efg.iterrows():
             fem = at(row.dofs, th.dofs, th.assembly / th.factorisations) if len(th) else np.nan
             if fem == fem:
@@ -610,9 +656,9 @@ def targets(table, shapes, growth):
                              f"{row.nodes} nodes, {int(row.dofs)} DOFs",
                              row.assembly / row.factorisations / fem, 2.0))
         for nodes in (10_000, 100_000):
-            e = pick(table, "efg", material, nodes)
             f = pick(table, "fem-p1p1", material, nodes)
-            if e is not None and f is not None:
+            e = None if f is None else pick(table, "efg", material, nodes, f.solver)
+            if e is not None:
                 stopped = f.status.startswith("stopped")
                 rows.append((f"whole step / fem-p1p1 at equal nodes ({material})",
                              f"{e.nodes} nodes" + (f" (fem-p1p1 {f.status}: an upper bound)"
@@ -642,9 +688,10 @@ def issue17_targets(table, machine_name="this machine"):
     """Issue 17's targets: measured value, target and verdict, one row each.
 
     A target whose run did not complete is "not measured" (:func:`verdict`), with the
-    run's status, and where it bounds the value, the bound, in ``where``. EFG and
-    fem-p1p1-stab are compared at equal nodes, each on the solver the bench chose for
-    the size (:func:`solver_for`): their best one here.
+    run's status, and where it bounds the value, the bound, in ``where``. The 10^5-node
+    step and memory are given per solver that ran there; the growth exponent on the
+    faster solver at each size (:func:`fastest`) and per solver; EFG and fem-p1p1-stab
+    are compared at equal nodes, each on its faster solver there.
 
     Parameters
     ----------
@@ -654,18 +701,19 @@ def issue17_targets(table, machine_name="this machine"):
         Where the runs were measured (:func:`cpu`), for the first target's baseline.
     """
     rows = []
+    efg = table[(table.method == "efg") & (table.material == "cam-clay")]
 
     def at_size(nodes, column, scale, what, limit, note=""):
-        row = pick(table, "efg", "cam-clay", nodes)
-        if row is None:
+        there = efg[np.isclose(efg.nodes, nodes, rtol=0.1)]
+        if not len(there):
             size = f"{nodes:.0e}".replace("e+0", "e")
             rows.append((what, f"no run at {size} nodes", np.nan, limit))
-            return
-        done, peak = row.status == "ok", row.get("peak_mb", np.nan)
-        until = f" (peak {peak / 1e3:.2f} GB until then)" if peak == peak else ""
-        rows.append((what, f"{row.nodes} nodes, {row.solver}"
-                     + ("" if done else f", {row.status}{until}") + note,
-                     row[column] * scale if done else np.nan, limit))
+        for _, row in there.iterrows():
+            done, peak = row.status == "ok", row.get("peak_mb", np.nan)
+            until = f" (peak {peak / 1e3:.2f} GB until then)" if peak == peak else ""
+            rows.append((what, f"{row.nodes} nodes, {row.solver}"
+                         + ("" if done else f", {row.status}{until}") + note,
+                         row[column] * scale if done else np.nan, limit))
 
     at_size(100_000, "step", 1.0, "EFG Cam-clay step at 1e5 nodes [s]", 0.5 * BASELINE_STEP,
             f", measured on {machine_name}; limit 0.5 x {BASELINE_STEP} s, issue 17's step "
@@ -675,26 +723,22 @@ def issue17_targets(table, machine_name="this machine"):
     at_size(1_000_000, "peak_mb", 1e-3, "EFG Cam-clay peak memory at 1e6 nodes [GB]",
             MACHINE_GB, f"; limit 24 GiB; this machine has {ram_gb():.1f} GB")
 
-    efg = table[(table.method == "efg") & (table.material == "cam-clay")]
-    fit = exponent(efg.nodes, efg.step, within=(1e4, 1e6))
-    done = efg[(efg.status == "ok") & (efg.nodes >= 1e4 / 1.1) & (efg.nodes <= 1.1e6)]
-    ends = [pick(table, "efg", "cam-clay", n) for n in (10_000, 1_000_000)]
-    whole = all(row is not None and row.status == "ok" for row in ends)
-    where = (f"{done.nodes.min()} to {done.nodes.max()} nodes, "
-             f"{', '.join(dict.fromkeys(done.solver))}" if len(done) > 1
-             else "fewer than two sizes completed")
-    if not whole and fit == fit:
-        where += f" only (fit {fit:.2f}): 1e4 or 1e6 did not complete or was not run"
-    rows.append(("EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes", where,
-                 fit if whole else np.nan, 1.15))
+    faster = pd.DataFrame([fastest(group) for _, group in efg.groupby("nodes")],
+                          columns=efg.columns)
+    series = {"faster solver at each size": faster,
+              **dict(tuple(efg.groupby("solver", sort=False)))}
+    for name, runs in series.items():
+        rows.append((f"EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes ({name})",
+                     *_growth(runs), 1.15))
 
     stab = table[table.method == "fem-p1p1-stab"]
-    for _, e in table[table.method == "efg"].iterrows():
-        f = stab[(stab.material == e.material) & (stab.nodes == e.nodes)]
-        if not len(f):
+    for (material, nodes), group in table[table.method == "efg"].groupby(
+            ["material", "nodes"], sort=False):
+        e = fastest(group)
+        f = fastest(stab[(stab.material == material) & (stab.nodes == nodes)])
+        if f is None:
             continue
-        f = f.iloc[0]
-        where = f"{e.nodes} nodes, {e.solver}"
+        where = f"{nodes} nodes, efg {e.solver}, fem-p1p1-stab {f.solver}"
         if e.status == "ok" and f.status == "ok":
             ratio = e.step / f.step
         else:
@@ -706,17 +750,31 @@ def issue17_targets(table, machine_name="this machine"):
                 where += f": ratio < {e.step / f.limit_s:.3g}"
             elif f.status == "ok" and e.status.startswith("stopped"):
                 where += f": ratio > {e.limit_s / f.step:.3g}"
-        rows.append((f"EFG step / fem-p1p1-stab step at equal nodes ({e.material})", where,
+        rows.append((f"EFG step / fem-p1p1-stab step at equal nodes ({material})", where,
                      ratio, 2.0))
     frame = pd.DataFrame(rows, columns=["target", "where", "measured", "limit"])
     frame["met"] = verdict(frame.measured, frame.limit)
     return frame
 
 
+def _growth(runs):
+    """``(where, exponent)`` of the steps of ``runs`` from 10^4 to 10^6 nodes; the exponent
+    is NaN unless both ends completed (``where`` then gives the partial fit)."""
+    fit = exponent(runs.nodes, runs.step, within=(1e4, 1e6))
+    done = runs[(runs.status == "ok") & (runs.nodes >= 1e4 / 1.1) & (runs.nodes <= 1.1e6)]
+    whole = all(((np.isclose(done.nodes, n, rtol=0.1)).any() for n in (1e4, 1e6)))
+    where = (f"{done.nodes.min()} to {done.nodes.max()} nodes, "
+             f"{', '.join(dict.fromkeys(done.solver))}" if len(done) > 1
+             else "fewer than two sizes completed")
+    if not whole and fit == fit:
+        where += f" only (fit {fit:.2f}): 1e4 or 1e6 did not complete or was not run"
+    return where, fit if whole else np.nan
+
+
 def figure(table, path):
     """Log-log time against nodes, one panel per phase: Cam-clay solid with circles,
-    elastic dashed with squares; filled markers on the direct solver, open ones on the
-    iterative one (``krylov``); in the step panel, a run stopped at its time limit is a
+    elastic dashed with squares; a line per solver, filled markers on the direct one, open
+    ones on the iterative one (``krylov``); in the step panel, a run stopped at its time limit is a
     triangle at that limit (its time is longer). Runs that died or did not run are not
     drawn (the tables list them)."""
     import matplotlib
@@ -733,11 +791,12 @@ def figure(table, path):
             if not group[phase].notna().any():
                 continue
             colour, marker = colours[method], "o" if material == "cam-clay" else "s"
-            ax.loglog(group.nodes, group[phase], "-" if material == "cam-clay" else "--",
-                      color=colour, label=f"{method}, {material}")
+            label = f"{method}, {material}"
             for krylov, part in group.groupby(group.solver == "krylov"):
-                ax.loglog(part.nodes, part[phase], marker, color=colour, ms=4,
-                          mfc="none" if krylov else colour)
+                ax.loglog(part.nodes, part[phase], ("-" if material == "cam-clay" else "--")
+                          + marker, color=colour, ms=4, mfc="none" if krylov else colour,
+                          label=label)
+                label = None
         if phase == "step":
             stopped = table[table.status.str.startswith("stopped")]
             for method, group in stopped.groupby("method"):
@@ -784,7 +843,8 @@ def machine():
     import scipy
 
     return (f"{cpu()}, {os.cpu_count()} cores, {ram_gb():.1f} GB; linear solver {direct()} "
-            f"below {KRYLOV_FROM} nodes, krylov from there; Python "
+            f"below {KRYLOV_FROM} nodes, krylov from there (and from {BOTH_FROM} for "
+            f"{', '.join(LARGE_METHODS)}); Python "
             f"{platform.python_version()}, NumPy {np.__version__}, SciPy {scipy.__version__}, "
             f"scikit-fem {skfem.__version__}, numba {numba.__version__}")
 
@@ -855,7 +915,11 @@ def run(path="reports/bench.md", sizes=SIZES):
         f"From {LARGE_FROM} nodes only {' and '.join(LARGE_METHODS)} run, with "
         f"{' and '.join(LARGE_MATERIALS)}. The linear solver is chosen by size: "
         f"{direct()} below {KRYLOV_FROM} nodes, the iterative back-end (krylov) from "
-        "there; each row names its own. A run is stopped after "
+        f"there; from {BOTH_FROM} nodes {' and '.join(LARGE_METHODS)} with "
+        f"{' and '.join(LARGE_MATERIALS)} also run on krylov below {KRYLOV_FROM}. Each "
+        "row names its solver, and the `efg` column EFG's essential conditions and "
+        "stabilisation (the Krylov back-end needs Nitsche's and the perturbation). A run "
+        "is stopped after "
         f"{TIME_LIMIT:.0f} s ({LARGE_TIME_LIMIT:.0f} s from {LARGE_FROM} nodes). "
         "Times are the solvers' phase timers [s]; the step includes everything the "
         "solver does in it (shape functions or bases, cells, every Newton iteration). "

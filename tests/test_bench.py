@@ -101,6 +101,14 @@ def test_plan_runs_only_efg_and_fem_p1p1_stab_on_cam_clay_from_large_from():
     assert {run[4] for run in large} == {bench.LARGE_TIME_LIMIT}
 
 
+def test_plan_runs_the_large_methods_on_both_solvers_from_both_from():
+    runs = bench.plan([bench.BOTH_FROM])
+    krylov = [run[:3] for run in runs if run[3] == "krylov"]
+    assert krylov == [(bench.BOTH_FROM, "cam-clay", m) for m in bench.LARGE_METHODS]
+    assert len(runs) == len(bench.METHODS) * len(bench.MATERIALS) + len(krylov)
+    assert not any(run[3] == "krylov" for run in bench.plan([bench.BOTH_FROM - 1]))
+
+
 def test_solver_and_limit_change_at_their_sizes(monkeypatch):
     assert bench.solver_for(bench.KRYLOV_FROM - 1) in ("pardiso", "superlu")
     assert bench.solver_for(bench.KRYLOV_FROM) == "krylov"
@@ -186,10 +194,41 @@ def test_issue17_growth_needs_both_ends_and_a_missing_size_is_not_measured():
                   ("efg", 100_010, 10.0, "ok", "pardiso", 500.0),
                   ("efg", 300_675, 30.0, "ok", "krylov", 500.0))
     goals = bench.issue17_targets(table).set_index("target")
-    growth = goals.loc["EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes"]
+    growth = goals.loc["EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes "
+                       "(faster solver at each size)"]
     assert growth.met == "not measured" and "only (fit 1.0" in growth["where"]
     assert goals.loc["EFG Cam-clay step at 1e6 nodes [s]"]["where"] == "no run at 1e6 nodes"
     assert goals.loc["EFG Cam-clay step at 1e6 nodes [s]"].met == "not measured"
+
+
+def test_issue17_targets_take_each_method_on_its_faster_solver():
+    """Both solvers at 1e4 and 1e5: the 1e5 step and memory per solver, the growth on the
+    faster one at each size and per solver, the ratio of each method's faster step."""
+    table = _rows(("efg", 10_296, 1.0, "ok", "pardiso", 500.0),
+                  ("efg", 10_296, 2.0, "ok", "krylov", 400.0),
+                  ("efg", 100_010, 40.0, "ok", "pardiso", 6000.0),
+                  ("efg", 100_010, 20.0, "ok", "krylov", 2500.0),
+                  ("efg", 1_004_276, 200.0, "ok", "krylov", 20000.0),
+                  ("fem-p1p1-stab", 10_296, 0.5, "ok", "pardiso", 0),
+                  ("fem-p1p1-stab", 10_296, 0.8, "ok", "krylov", 0),
+                  ("fem-p1p1-stab", 100_010, 30.0, "stopped at 240 s", "pardiso", 0),
+                  ("fem-p1p1-stab", 100_010, 8.0, "ok", "krylov", 0))
+    goals = bench.issue17_targets(table)
+    step = goals[goals.target == "EFG Cam-clay step at 1e5 nodes [s]"]
+    assert step.measured.tolist() == [40.0, 20.0]
+    assert [w.split(",")[1].strip() for w in step["where"]] == ["pardiso", "krylov"]
+    memory = goals[goals.target == "EFG Cam-clay peak memory at 1e5 nodes [GB]"]
+    assert memory.met.tolist() == ["**no**", "yes"]
+    growth = goals[goals.target.str.contains("growth")].set_index("target").measured
+    name = "EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes ({})"
+    assert growth[name.format("faster solver at each size")] == pytest.approx(
+        bench.exponent([10_296, 100_010, 1_004_276], [1.0, 20.0, 200.0]))
+    assert growth[name.format("krylov")] == pytest.approx(
+        bench.exponent([10_296, 100_010, 1_004_276], [2.0, 20.0, 200.0]))
+    assert np.isnan(growth[name.format("pardiso")])
+    ratios = goals[goals.target.str.contains("fem-p1p1-stab")]
+    assert ratios.measured.tolist() == pytest.approx([2.0, 2.5])      # 1/0.5, 20/8
+    assert "efg krylov, fem-p1p1-stab krylov" in ratios["where"].iloc[1]
 
 
 def test_exponent_fits_only_the_range_asked_for():
