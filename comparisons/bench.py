@@ -55,6 +55,7 @@ import skfem
 from efg.mls import ShapeFunctions
 from efg.quadrature import delaunay_cells
 from soil.errors import InputError
+from soil import linear
 from soil.linear import available, backend, linear_solver
 from soil.problems import load_case
 from soil.settings import DEFAULT_SCALE
@@ -72,8 +73,10 @@ LARGE_FROM = 300_000
 LARGE_METHODS = ("efg", "fem-p1p1-stab")
 LARGE_MATERIALS = ("cam-clay",)
 #: From this many (requested) nodes the tangents are solved by the iterative back-end
-#: ``soil.linear.linear_solver("krylov")``; below, by the direct one (:func:`direct`).
-KRYLOV_FROM = 300_000
+#: ``soil.linear.linear_solver("krylov")``; below, by the direct one (:func:`direct`):
+#: where the default back-end turns iterative (:data:`soil.linear.KRYLOV_FROM` unknowns,
+#: three per node).
+KRYLOV_FROM = linear.KRYLOV_FROM // 3
 #: From this many (requested) nodes up to :data:`KRYLOV_FROM`, :data:`LARGE_METHODS` with
 #: :data:`LARGE_MATERIALS` run on both back-ends: issue 17's targets take each method on
 #: its faster one, measured, and the Krylov path's growth spans 10^4 to 10^6.

@@ -220,7 +220,7 @@ class _System:
         self.du, self.p, self.plate, self.lam = (np.zeros(2 * self.n), points.p.copy(),
                                                  points.plate, 0.0)
         self.layout = _layout(points.nodes, partial(_pressure_mass, disc), model.scales,
-                              bc.rigid.any())
+                              bc.rigid.any(), case.efg)
 
     def residual(self):
         """``[R_u, R_p, plate?, pin?]`` at the iterate and its scaled size beyond
@@ -519,9 +519,11 @@ def _pressure_mass(disc, extra=0):
     return sp.csr_matrix((M.data, (M.row + 2 * n, M.col + 2 * n)), shape=(size, size))
 
 
-def _layout(nodes, mass, scales, rigid):
+def _layout(nodes, mass, scales, rigid, settings):
     """The :class:`soil.linear.Layout` of the unknowns ``[ux, uy, p, plate?, pin?]``;
-    ``mass(extra)`` gives the pressure mass matrix."""
+    ``mass(extra)`` gives the pressure mass matrix. The Krylov back-end suits EFG with
+    Nitsche's conditions (a penalty's diagonal spans 1e6: a small residual says nothing
+    of the error) and a pressure stabilisation (``settings``, the case's EFG settings)."""
     n = len(nodes)
     plate, pin = [scales.force] * int(rigid), [scales.volume] * int(scales.pin_pressure)
     extra = len(plate) + len(pin)
@@ -531,7 +533,9 @@ def _layout(nodes, mass, scales, rigid):
                   scales=np.concatenate([np.full(2 * n, scales.force),
                                          np.full(n, scales.volume), plate, pin]),
                   mass=partial(mass, extra=extra),
-                  modulus=scales.modulus, smoother="schwarz", strength=STRENGTH)
+                  modulus=scales.modulus, smoother="schwarz", strength=STRENGTH,
+                  iterative=(settings.essential == "nitsche"
+                             and settings.stabilisation != "none"))
 
 
 def _roundoff(disc, points, du, du_bar, p, plate, alpha_u, alpha_p, rigid_w):

@@ -458,7 +458,7 @@ class _System:
         self.c_mean = np.zeros(len(x))
         self.c_mean[2 * n_u:] = disc.p.vector(disc.dx[..., None, None] * [1.0, 0, 0])
         self.layout = _layout(con.T, n_u, disc.doflocs.T, self.c_mean, model.scales,
-                              model.space.pair.smoother)
+                              model.space.pair)
 
     def residual(self):
         """The reduced residual (plus the pin) and its scaled size."""
@@ -516,10 +516,11 @@ class _System:
                        uniqueness=uniqueness, reactions=reactions)
 
 
-def _layout(T, n_u, u_locations, mass, scales, smoother):
+def _layout(T, n_u, u_locations, mass, scales, pair):
     """The :class:`soil.linear.Layout` of the reduced unknowns (``T``'s columns, the
     mean-pressure multiplier last when pinned): a column of one full DOF has its field,
-    the plate's column (many) none; ``smoother`` the pair's AMG smoother."""
+    the plate's column (many) none; the AMG smoother and whether the Krylov back-end
+    suits it are the element ``pair``'s."""
     n = T.shape[0]
     fields = np.concatenate([np.zeros(n_u, int), np.ones(n_u, int),
                              np.full(n - 2 * n_u, 2)])
@@ -534,7 +535,7 @@ def _layout(T, n_u, u_locations, mass, scales, smoother):
                   locations=np.concatenate([locations[first], np.zeros((pin, 2))]),
                   scales=np.append(scale, [scales.volume] * pin),
                   mass=sp.diags(np.append(np.where(reduced == 2, T.T @ mass, 0.0), [0.0] * pin)),
-                  modulus=scales.modulus, smoother=smoother)
+                  modulus=scales.modulus, smoother=pair.smoother, iterative=pair.iterative)
 
 
 def _residual(model, disc, current, x, stress, J, Finv, dt):

@@ -31,7 +31,9 @@ class Pair:
 
     ``stabilised`` adds the flow-equation perturbation of Aguilar et al. (2008) to the
     continuity equation (see :mod:`fem_reference.solver`). ``smoother`` is the Krylov
-    back-end's AMG smoother for the pair (:class:`soil.linear.Layout`).
+    back-end's AMG smoother for the pair and ``iterative`` whether that back-end suits
+    it (inf-sup stable or stabilised), so that it is the default on large systems
+    (:class:`soil.linear.Layout`).
     """
 
     shape: str
@@ -40,15 +42,18 @@ class Pair:
     intorder: int
     stabilised: bool = False
     smoother: str = "gauss_seidel"
+    iterative: bool = False
 
 
 #: The FEM methods of ``soilwater run --method``.
 PAIRS = {
-    "fem-th": Pair("triangle", ElementTriP2, ElementTriP1, 4, smoother="schwarz"),
+    "fem-th": Pair("triangle", ElementTriP2, ElementTriP1, 4, smoother="schwarz",
+                   iterative=True),
     "fem-p1p1": Pair("triangle", ElementTriP1, ElementTriP1, 2),
-    "fem-p1p1-stab": Pair("triangle", ElementTriP1, ElementTriP1, 2, stabilised=True),
+    "fem-p1p1-stab": Pair("triangle", ElementTriP1, ElementTriP1, 2, stabilised=True,
+                          iterative=True),
     "fem-q1q1": Pair("quad", ElementQuad1, ElementQuad1, 3),
-    "fem-q2q1": Pair("quad", ElementQuad2, ElementQuad1, 5),
+    "fem-q2q1": Pair("quad", ElementQuad2, ElementQuad1, 5, iterative=True),
 }
 
 

@@ -162,7 +162,8 @@ def run(case, method, options, current, step, row, snapshot, summary, progress=T
     Returns
     -------
     Result
-        Its summary holds ``steps``, ``tolerance``, ``linear_solver``, ``summary``, the
+        Its summary holds ``steps``, ``tolerance``, ``linear_solver`` (the back-end of
+        the last factorisation, :func:`soil.linear.backend`'s without one), ``summary``, the
         statistics of :func:`march`, the counts of :func:`newton`
         (``factorisations``, ``symmetric_factorisations``, ``perturbed_pivots``,
         ``factor_flops``, ``linear_iterations``) and ``timings``.
@@ -218,7 +219,8 @@ def newton(system, stats):
         ``sym(K)``), ``perturbed_pivots`` (summed over the factorisations; PARDISO's
         ``iparm(14)``), ``factor_flops`` (PARDISO's ``iparm(19)``, summed),
         ``linear_iterations`` (Krylov iterations) and ``timings`` (``assembly_s``,
-        ``solve_s``).
+        ``solve_s``); ``linear_solver`` set to the back-end of the last factorisation
+        (:func:`soil.linear.identity`).
 
     Returns
     -------
@@ -284,7 +286,9 @@ def newton(system, stats):
 
 
 def _count(stats, lu):
-    """Add the factorisation ``lu`` to the counts of :func:`newton`."""
+    """Add the factorisation ``lu`` to the counts of :func:`newton`, and name its
+    back-end (``linear_solver``, :func:`soil.linear.identity`)."""
+    stats["linear_solver"] = identity(lu.backend)
     stats["factorisations"] += 1
     stats["symmetric_factorisations"] += lu.symmetric
     stats["perturbed_pivots"] += lu.perturbed_pivots

@@ -106,6 +106,8 @@ class Krylov:
     ----------
     iterations : int
         FGMRES iterations of all solves so far.
+    backend : str
+        ``"krylov"`` (:func:`soil.linear.backend`).
     symmetric, perturbed_pivots, flops
         False, 0 and 0.0: the counts :func:`soil.coupling.newton` keeps of a factorisation.
     current : bool
@@ -114,7 +116,7 @@ class Krylov:
         as modified Newton.
     """
 
-    symmetric, perturbed_pivots, flops, current = False, 0, 0.0, True
+    backend, symmetric, perturbed_pivots, flops, current = "krylov", False, 0, 0.0, True
 
     def __init__(self, K, layout):
         if layout is None or not layout.complete:

@@ -1,6 +1,6 @@
-"""The sparse direct solver both coupled solvers factorise their Newton tangents with.
+"""The linear solvers of both coupled solvers' Newton tangents.
 
-Two back-ends, one interface (:func:`factorise` returns an object with ``solve(b)``):
+Three back-ends, one interface (:func:`factorise` returns an object with ``solve(b)``):
 
 - ``"pardiso"``: Intel MKL PARDISO through ``pypardiso`` (extra ``soilwater[fast]``, x86_64
   only). Nested-dissection ordering (METIS), threaded, weighted matching for the zero
@@ -8,16 +8,16 @@ Two back-ends, one interface (:func:`factorise` returns an object with ``solve(b
 - ``"superlu"``: ``scipy.sparse.linalg.splu`` with COLAMD ordering, always available,
   single-threaded. Its fill grows fast with the 20 to 30 neighbours of an MLS node, so it
   is slow on large EFG tangents (``make bench`` measures both).
-
 - ``"krylov"``: no factorisation; flexible GMRES with a block preconditioner (AMG with a
   Schwarz smoother on the displacements, a fixed-stress Schur complement with the pressure
   mass matrix on the pore pressures; :mod:`soil.krylov`,
   needs pyamg). Each solve stops at the relative residual :func:`forcing` asks for
-  (inexact Newton). Its memory grows as N, a factor's faster; it is chosen only when asked
-  for (``make bench`` does from :data:`comparisons.bench.KRYLOV_FROM` nodes).
+  (inexact Newton). Its memory grows as N, a factor's faster.
 
-``pardiso`` is used when ``pypardiso`` imports, unless the environment variable
-``SOILWATER_LINEAR_SOLVER`` (``superlu``, ``pardiso`` or ``krylov``) asks otherwise. The
+``pardiso`` is used when ``pypardiso`` imports, else ``superlu``; from
+:data:`KRYLOV_FROM` unknowns, ``krylov`` for a discretisation it converges on
+(:attr:`Layout.iterative`), where pyamg imports. The environment variable
+``SOILWATER_LINEAR_SOLVER`` (``superlu``, ``pardiso`` or ``krylov``) forces one. The
 direct ones reuse a factorisation while it contracts the Newton residual at least
 :data:`CONTRACTION`-fold per iteration (modified Newton), and refactorise the current
 tangent otherwise; the Krylov one solves with the current tangent at every iteration
@@ -54,6 +54,11 @@ CONTRACTION = 0.1
 #: 15 % fewer FGMRES iterations (``python docs/krylov_study.py --newton 3000``); with the
 #: earlier lumped-mass preconditioner Newton stalled at 1e-2.
 FORCING_MAX = 1e-4
+#: From this many unknowns the Krylov back-end is the default for a discretisation that
+#: suits it (:attr:`Layout.iterative`): 3 x 10^5 nodes of (ux, uy, p_w), where EFG's
+#: PARDISO factor would need about 20 GB and its step is no faster than Krylov's from
+#: 10^5 nodes on (``make bench``, which runs both there).
+KRYLOV_FROM = 900_000
 #: PARDISO ``iparm`` (MKL's 1-based numbering) of the node-blocked factorisation: own
 #: settings (1), METIS ordering (2), the user's permutation (5), one step of iterative
 #: refinement (8), pivots perturbed by 1e-13 (10), no scaling (11) and no weighted
@@ -111,6 +116,11 @@ class Layout:
         subdomains grow along it) where ``|a_ij| >= theta sqrt(|a_ii a_jj|)``. 0 (every
         coupling; pyamg's default) unless the discretisation asks for more
         (``python docs/krylov_study.py --strength``).
+    iterative : bool
+        The discretisation suits the Krylov back-end (EFG with Nitsche's conditions and a
+        pressure stabilisation; the inf-sup stable or stabilised FEM pairs), which
+        :func:`backend` then picks by default from :data:`KRYLOV_FROM` unknowns. False:
+        a direct solver at every size, unless ``SOILWATER_LINEAR_SOLVER`` says otherwise.
     """
 
     groups: np.ndarray = None
@@ -121,6 +131,7 @@ class Layout:
     modulus: float = 1.0
     smoother: str = "gauss_seidel"
     strength: float = 0.0
+    iterative: bool = False
 
     def __post_init__(self):
         """Reject an unknown :attr:`smoother` or a :attr:`strength` outside [0, 1)."""
@@ -156,8 +167,20 @@ def available(name):
     return True
 
 
-def backend():
-    """Name of the back-end in use: ``"pardiso"``, ``"superlu"`` or ``"krylov"``."""
+def backend(unknowns=0, iterative=False):
+    """Name of the back-end of a system of ``unknowns`` unknowns: ``"pardiso"``,
+    ``"superlu"`` or ``"krylov"``.
+
+    ``SOILWATER_LINEAR_SOLVER`` when it is set; else ``"krylov"`` for a discretisation
+    that suits it (``iterative``, :attr:`Layout.iterative`) from :data:`KRYLOV_FROM`
+    unknowns where pyamg imports; else ``"pardiso"`` where pypardiso imports; else
+    ``"superlu"``.
+
+    Examples
+    --------
+    >>> backend(KRYLOV_FROM, iterative=False) == backend()
+    True
+    """
     choice = os.environ.get("SOILWATER_LINEAR_SOLVER", "").lower()
     if choice not in ("", "pardiso", "superlu", "krylov"):
         raise InputError(f"SOILWATER_LINEAR_SOLVER={choice!r} is not a solver; use "
@@ -170,18 +193,21 @@ def backend():
                          "pip install pyamg")
     if choice:
         return choice
+    if iterative and unknowns >= KRYLOV_FROM and available("krylov"):
+        return "krylov"
     return "pardiso" if available("pardiso") else "superlu"
 
 
-def identity():
-    """``"name version"`` of the back-end in use, e.g. ``"superlu scipy 1.14.1"`` or
-    ``"pardiso pypardiso 0.4.6 mkl 2025.0.1"``: results are reproducible only to
-    round-off across back-ends, so caches and sidecars record it."""
-    if backend() == "superlu":
+def identity(name=None):
+    """``"name version"`` of the back-end ``name`` (None: :func:`backend`'s), e.g.
+    ``"superlu scipy 1.14.1"`` or ``"pardiso pypardiso 0.4.6 mkl 2025.0.1"``: results are
+    reproducible only to round-off across back-ends, so caches and sidecars record it."""
+    name = backend() if name is None else name
+    if name == "superlu":
         import scipy
 
         return f"superlu scipy {scipy.__version__}"
-    if backend() == "krylov":
+    if name == "krylov":
         return f"krylov pyamg {_version('pyamg')}"
     return "pardiso " + " ".join(f"{name} {_version(name)}" for name in ("pypardiso", "mkl"))
 
@@ -271,7 +297,8 @@ def factorise(K, layout=None, symmetric=False):
         SuperLU, which does not perturb); ``flops``: floating-point operations of the
         factorisation as PARDISO reports them (``iparm(19)``; 0 for the others);
         ``iterations``: Krylov iterations of its solves (0 for the direct ones);
-        ``current``: whether Newton should hand it each new tangent (``adopt(K)``,
+        ``backend``: the back-end's name (:func:`backend`); ``current``: whether Newton
+        should hand it each new tangent (``adopt(K)``,
         False when it cannot solve with ``K`` and ``K`` must be factorised anew: the
         direct ones never can, the Krylov one always can, through its preconditioner).
 
@@ -288,7 +315,8 @@ def factorise(K, layout=None, symmetric=False):
     >>> bool(np.allclose(K @ lu.solve(np.array([1.0, 2.0, 3.0])), [1.0, 2.0, 3.0]))
     True
     """
-    name, groups = backend(), None if layout is None else layout.groups
+    name = backend(K.shape[0], layout is not None and layout.iterative)
+    groups = None if layout is None else layout.groups
     if name == "krylov":
         return Krylov(K, layout)
     if name == "pardiso":
@@ -313,7 +341,7 @@ class _Factor:
 class _SuperLU(_Factor):
     """SuperLU's LU factorisation of ``K`` (it has no symmetric mode)."""
 
-    symmetric, perturbed_pivots, flops = False, 0, 0.0
+    backend, symmetric, perturbed_pivots, flops = "superlu", False, 0, 0.0
 
     def __init__(self, K):
         try:
@@ -328,6 +356,8 @@ class _SuperLU(_Factor):
 class _Pardiso(_Factor):
     """A PARDISO factorisation of one matrix (of ``K``, or of ``sym(K)`` when
     ``symmetric``); its MKL memory is freed with the object."""
+
+    backend = "pardiso"
 
     def __init__(self, K, groups=None, symmetric=False):
         import pypardiso

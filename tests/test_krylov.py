@@ -11,7 +11,8 @@ import fem_reference.solver
 from comparisons.bench import compression
 from soil.errors import InputError
 from soil.krylov import _amg, _Schwarz, _subdomains
-from soil.linear import Layout, factorise, linear_solver
+import soil.linear
+from soil.linear import Layout, backend, factorise, linear_solver
 from soil.problems import load_case
 
 pytest.importorskip("pyamg")
@@ -242,3 +243,42 @@ def test_runs_agree_with_the_direct_solver(name, method, overrides):
     for column in ("p", "q", "settlement"):
         a, b = direct.history[column], krylov.history[column]
         assert np.abs(a - b).max() <= 1e-6 * max(np.abs(a).max(), 1e-12), column
+
+
+@pytest.mark.parametrize("method, overrides, iterative", [
+    ("efg", ['efg.essential="nitsche"', 'efg.stabilisation="perturbation"'], True),
+    ("efg", ['efg.stabilisation="perturbation"'], False),                 # penalty
+    ("efg", ['efg.essential="nitsche"'], False),                          # unstabilised
+    ("fem-p1p1-stab", [], True),
+    ("fem-p1p1", [], False),
+])
+def test_krylov_is_the_default_on_large_systems_that_suit_it(monkeypatch, method,
+                                                            overrides, iterative):
+    """With no SOILWATER_LINEAR_SOLVER, a run of at least KRYLOV_FROM unknowns (lowered
+    here) is solved by the Krylov back-end when its discretisation suits it, and the
+    result names the back-end that solved it; below KRYLOV_FROM, the direct one."""
+    monkeypatch.delenv("SOILWATER_LINEAR_SOLVER", raising=False)
+    direct = backend()
+    case = load_case("unconfined-compression", ["discretisation.nx=5", "discretisation.ny=7",
+                                                "time.end=0.2", "time.steps=1", *overrides])
+
+    def solver_of_a_run():
+        result = (efg.solver.solve(case, progress=False) if method == "efg"
+                  else fem_reference.solver.solve(case, method, progress=False))
+        return result.summary["linear_solver"].split()[0]
+
+    monkeypatch.setattr(soil.linear, "KRYLOV_FROM", 50)
+    assert solver_of_a_run() == ("krylov" if iterative else direct)
+    monkeypatch.setattr(soil.linear, "KRYLOV_FROM", 10**6)
+    assert solver_of_a_run() == direct
+
+
+def test_backend_switches_at_krylov_from_and_the_environment_overrides_it(monkeypatch):
+    monkeypatch.delenv("SOILWATER_LINEAR_SOLVER", raising=False)
+    direct, size = backend(), soil.linear.KRYLOV_FROM
+    assert direct != "krylov"
+    assert backend(size - 1, iterative=True) == direct
+    assert backend(size, iterative=True) == "krylov"
+    assert backend(size, iterative=False) == direct
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "superlu")
+    assert backend(size, iterative=True) == "superlu"
