@@ -170,14 +170,15 @@ def spatial_tangent(C, effective, total):
     ndarray, shape (P, 2, 2, 2, 2)
         Indices (point, test field f, test derivative k, trial field g, trial derivative l).
     """
-    d = np.eye(2)
     B = GRADIENT_TO_VOIGT.reshape(4, 4)                     # (f k, Voigt)
     T = (B @ C @ B.T).reshape(-1, 2, 2, 2, 2)
-    T += 0.5 * (np.einsum("gf,mlk->mfkgl", d, effective)
-                - np.einsum("lf,mgk->mfkgl", d, effective)
-                - np.einsum("mfg,lk->mfkgl", effective, d)
-                + np.einsum("mfl,gk->mfkgl", effective, d))
-    T += np.einsum("mfk,gl->mfkgl", total, d) - np.einsum("mfl,gk->mfkgl", total, d)
+    half, turned = 0.5 * effective, 0.5 * np.swapaxes(effective, 1, 2)
+    for i in range(2):                                      # the Kronecker deltas
+        T[:, i, :, i, :] += turned                          # d_gf s'_lk / 2
+        T[:, i, :, :, i] -= turned                          # -d_lf s'_gk / 2
+        T[:, :, i, :, i] -= half                            # -s'_fg d_lk / 2
+        T[:, :, i, i, :] += half - total                    # (s'_fl / 2 - s_fl) d_gk
+        T[:, :, :, i, i] += total                           # s_fk d_gl
     return T
 
 
