@@ -55,6 +55,7 @@ as the Newton tolerance does.
 """
 
 from contextlib import contextmanager
+from functools import partial
 
 import numba
 import numpy as np
@@ -267,7 +268,23 @@ def _amg(A, smoother, strength, modes=None, blocksize=1):
     for level in ml.levels:                 # what keep=True held for the smoother's setup
         for name in ("C", "AggOp", "T", "P0"):
             level.__dict__.pop(name, None)
-    return ml.aspreconditioner()
+    return partial(_v_cycle, ml.levels, ml.coarse_solver)
+
+
+def _v_cycle(levels, coarse_solver, b, level=0):
+    """One V-cycle from a zero guess on the pyamg hierarchy ``levels[level:]``: the cycle
+    of ``MultilevelSolver.solve(b, maxiter=1)``, without the two finest-level residuals
+    that ``solve`` computes for its stopping test (a fifth of the displacement cycle's
+    time on the 10^5-node EFG tangent)."""
+    if len(levels) - level == 1:
+        return coarse_solver(levels[level].A, b)
+    here = levels[level]
+    x = np.zeros_like(b)
+    here.presmoother(here.A, x, b)
+    coarse_b = here.R @ (b - here.A @ x)
+    x += here.P @ _v_cycle(levels, coarse_solver, coarse_b, level + 1)
+    here.postsmoother(here.A, x, b)
+    return x
 
 
 @contextmanager
