@@ -83,13 +83,16 @@ OVERLAP = 0.25
 GROUPS = 2
 #: Unknowns (summed over the subdomains) from which a Schwarz sweep is split into
 #: :data:`GROUPS` runs; a smaller one keeps the subdomains' own order, one after another:
-#: there the split gains little time, and its order smooths worse (fem-th's unconfined
-#: compression on the 7 x 9 grid with centres: 588 Newton iterations, 77003 FGMRES
-#: iterations and 7 cut-backs against 470, 44544 and 1).
+#: there the split gains little time.
 SPLIT_FROM = 100_000
 #: Unknowns (summed over its subdomains) from which a stage of a Schwarz sweep is solved
 #: side by side; a smaller one costs less than handing it to the threads.
 SIDE_BY_SIDE_FROM = 10_000
+#: Precision of the Schwarz smoother's kept inverses and rows (:class:`_Schwarz`): single.
+#: A smoother needs no more (FGMRES's residual stays double): on the 10^5-node EFG tangent
+#: FGMRES takes 25 iterations to 1e-8 either way, the inverses take half the memory, the
+#: rows two thirds, and the solve about a tenth less time (scratch timing).
+INVERSES = ROWS = np.float32
 #: The smoother of every level Schwarz does not smooth: symmetric Gauss-Seidel on the
 #: matrix's blocks (nodes; pyamg's default).
 GAUSS_SEIDEL = ("block_gauss_seidel", {"sweep": "symmetric"})
@@ -332,10 +335,8 @@ class _Schwarz:
     ``A``, the correction added at once. The smoother keeps its own copy of each
     subdomain's rows of ``A``, in sweep order (a row in two subdomains twice): read
     straight through, their residuals cost half of what the rows gathered from ``A``
-    cost. The inverses stay in double precision: in single precision (half the
-    preconditioner's largest array) fem-th's unconfined compression took 645 Newton
-    iterations, 76870 FGMRES iterations and 10 cut-backs through its softening peak
-    instead of 470, 44544 and 1.
+    cost. Inverses and rows are kept in single precision (:data:`INVERSES`,
+    :data:`ROWS`); the residuals and corrections are summed in double.
 
     From :data:`SPLIT_FROM` unknowns the order runs on every core (:mod:`soil.threads`)
     and is the same on any number of them: the subdomains are split into :data:`GROUPS`
@@ -389,14 +390,14 @@ class _Schwarz:
         self.subdomain = subdomain[np.repeat(pointer[order] - self.pointer[:-1], sizes)
                                    + np.arange(self.pointer[-1])].view(np.uint32)
         self.inverse_pointer = np.concatenate([[0], np.cumsum(sizes**2)])
-        self.inverses = np.empty(self.inverse_pointer[-1])
+        self.inverses = np.empty(self.inverse_pointer[-1], dtype=INVERSES)
         for size in np.unique(sizes):                       # in batches of one size
             at = np.flatnonzero(sizes == size)
             rows = self.subdomain[self.pointer[at][:, None] + np.arange(size)].ravel()
             inverse = np.linalg.inv(_blocks(A, rows, size)).reshape(len(at), -1)
             at = self.inverse_pointer[at][:, None] + np.arange(size * size)
             self.inverses[at] = inverse
-        self.rows = A[self.subdomain]
+        self.rows = A[self.subdomain].astype(ROWS)
 
     def forward(self, A, x, b):
         """One sweep, ``x`` updated in place (pyamg's smoother signature; ``A`` is the

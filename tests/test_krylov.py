@@ -109,7 +109,8 @@ def test_bordered_unknowns_are_eliminated(monkeypatch):
 def test_schwarz_subdomains_cover_every_unknown_and_keep_their_inverses():
     """The overlapping subdomains of a smoothed-aggregation hierarchy hold every unknown
     (some in two), each sorted, the kept block inverses are those of ``A``'s blocks, and
-    a sweep is multiplicative Schwarz on ``A`` (from the kept rows)."""
+    a sweep is multiplicative Schwarz on ``A`` (from the kept rows), both to the single
+    precision they are kept in (``INVERSES``, ``ROWS``)."""
     import pyamg
 
     K, layout = biot(n=20)
@@ -125,13 +126,14 @@ def test_schwarz_subdomains_cover_every_unknown_and_keep_their_inverses():
         assert np.all(np.diff(dofs) > 0)
         block = A[dofs][:, dofs].toarray()
         inverse = inv[inv_ptr[i]:inv_ptr[i + 1]].reshape(len(dofs), len(dofs))
-        assert np.allclose(inverse @ block, np.eye(len(dofs)), atol=1e-10)
+        assert inverse.dtype == np.float32
+        assert np.allclose(inverse @ block, np.eye(len(dofs)), atol=1e-5)
     b, swept, expected = np.random.default_rng(1).standard_normal(800), np.zeros(800), np.zeros(800)
     smoother.forward(A, swept, b)
     for i in range(len(ptr) - 1):
         dofs = sub[ptr[i]:ptr[i + 1]]
         expected[dofs] += np.linalg.solve(A[dofs][:, dofs].toarray(), (b - A @ expected)[dofs])
-    assert np.allclose(swept, expected, rtol=1e-10, atol=1e-10 * np.abs(expected).max())
+    assert np.allclose(swept, expected, rtol=1e-5, atol=1e-5 * np.abs(expected).max())
 
 
 def test_schwarz_solves_side_by_side_only_subdomains_that_do_not_touch(monkeypatch):
