@@ -54,8 +54,8 @@ import skfem
 
 from efg.mls import ShapeFunctions
 from efg.quadrature import delaunay_cells
-from soil.errors import InputError
 from soil import linear
+from soil.errors import InputError
 from soil.linear import available, backend, linear_solver
 from soil.problems import load_case
 from soil.settings import DEFAULT_SCALE

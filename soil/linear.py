@@ -37,6 +37,7 @@ import os
 import weakref
 from contextlib import contextmanager
 from dataclasses import dataclass
+from functools import cache
 from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
@@ -202,14 +203,21 @@ def identity(name=None):
     """``"name version"`` of the back-end ``name`` (None: :func:`backend`'s), e.g.
     ``"superlu scipy 1.14.1"`` or ``"pardiso pypardiso 0.4.6 mkl 2025.0.1"``: results are
     reproducible only to round-off across back-ends, so caches and sidecars record it."""
-    name = backend() if name is None else name
+    return _described(backend() if name is None else name)
+
+
+@cache
+def _described(name):
+    """:func:`identity` of the back-end ``name``, looked up once per process (Newton
+    records it at every factorisation)."""
     if name == "superlu":
         import scipy
 
         return f"superlu scipy {scipy.__version__}"
     if name == "krylov":
         return f"krylov pyamg {_version('pyamg')}"
-    return "pardiso " + " ".join(f"{name} {_version(name)}" for name in ("pypardiso", "mkl"))
+    return "pardiso " + " ".join(f"{package} {_version(package)}"
+                                 for package in ("pypardiso", "mkl"))
 
 
 def _version(distribution):
