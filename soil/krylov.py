@@ -434,7 +434,7 @@ def _gathered(A, rows, dtype):
     [[2.0, 3.0], [1.0, 0.0], [2.0, 3.0]]
     """
     lengths = np.diff(A.indptr)[rows]
-    indptr = np.concatenate([[0], np.cumsum(lengths)]).astype(A.indptr.dtype)
+    indptr = np.concatenate([[0], np.cumsum(lengths, dtype=np.int64)])   # no overflow
     indices, data = np.empty(indptr[-1], A.indices.dtype), np.empty(indptr[-1], dtype)
 
     def gather(lo, hi):
