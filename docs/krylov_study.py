@@ -68,6 +68,13 @@ preconditioned block triangular with the displacement block solved by one AMG V-
 and the pressure block by the fixed-stress ``D - s M_p/M`` with the lumped or the
 consistent mass, the SIMPLE ``D - C diag(A)^-1 B``, or (up to 4000 pressures) the true
 Schur complement ``D - C A^-1 B``, each exactly or through AMG.
+
+``python docs/krylov_study.py --spectral [nodes ...]`` (default 1e5; about a minute): pyamg's
+estimate of the spectral radius of ``D^-1 S`` that weighs its Jacobi prolongation smoother,
+on the displacement block of the bench step's first tangent (scaled and in node blocks as
+:class:`soil.krylov.Krylov` builds it), Arnoldi run by run (15 products each, restarted
+until the relative error is below 0.01): the restart vector's type, time, estimate and
+error, as pyamg restarts (from the complex Ritz vector) and from its real part.
 """
 
 import dataclasses
@@ -436,6 +443,40 @@ def memory(nodes):
     _memory("after the step")
 
 
+def spectral(sizes):
+    """pyamg's restarted Arnoldi estimate of rho(D^-1 S), run by run, per size."""
+    import scipy.sparse as sp
+    from pyamg.util.linalg import _approximate_eigenvalues
+    from pyamg.util.utils import get_diagonal, scale_rows
+
+    from soil.krylov import _node_blocked
+
+    for nodes in sizes:
+        K, layout = first_tangent(nodes, krylov=True)
+        blocked = _node_blocked(layout)
+        u = blocked[np.isin(layout.fields[blocked], (0, 1))]
+        A = sp.csr_matrix(sp.diags(1.0 / layout.scales[u]) @ sp.csr_matrix(K)[u][:, u])
+        S = sp.bsr_matrix(A, blocksize=(2, 2))
+        scaled = scale_rows(S, get_diagonal(S, inv=True), copy=True)      # as pyamg does
+        for restart in ("complex", "real"):
+            np.random.seed(0)
+            v0 = np.random.rand(S.shape[0], 1)
+            for run in range(6):
+                tic = time.perf_counter()
+                vectors, values, H, V, _ = _approximate_eigenvalues(
+                    scaled, 15, False, initial_guess=v0 / np.linalg.norm(v0))
+                top = np.abs(values).argmax()
+                error = abs(H[len(values), len(values) - 1] * vectors[-1, top] / values[top])
+                print(f"{nodes} nodes, {restart} restarts, run {run}: vector "
+                      f"{V[0].dtype}, {time.perf_counter() - tic:.2f} s, rho "
+                      f"{abs(values[top]):.5f}, relative error {error:.2g}", flush=True)
+                if error < 0.01:
+                    break
+                v0 = np.hstack(V[:-1]) @ vectors[:, top].reshape(-1, 1)
+                if restart == "real":             # the Ritz vector's phase removed
+                    v0 = np.real(v0 * np.exp(-1j * np.angle(v0[np.abs(v0).argmax()])))
+
+
 def schur(sizes):
     """FGMRES iterations with each displacement and pressure block solve, per size."""
     import scipy.linalg
@@ -518,6 +559,8 @@ if __name__ == "__main__":
         threads([int(float(n)) for n in sys.argv[2:]] or [100_000])
     elif sys.argv[1:2] == ["--schur"]:
         schur([int(float(n)) for n in sys.argv[2:]] or [3_000, 10_000])
+    elif sys.argv[1:2] == ["--spectral"]:
+        spectral([int(float(n)) for n in sys.argv[2:]] or [100_000])
     elif sys.argv[1:2] == ["--symmetric"]:
         symmetric([int(float(n)) for n in sys.argv[2:]] or [10_000, 100_000])
     else:
