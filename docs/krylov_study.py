@@ -75,6 +75,12 @@ on the displacement block of the bench step's first tangent (scaled and in node 
 :class:`soil.krylov.Krylov` builds it), Arnoldi run by run (15 products each, restarted
 until the relative error is below 0.01): the restart vector's type, time, estimate and
 error, as pyamg restarts (from the complex Ritz vector) and from its real part.
+
+``python docs/krylov_study.py --faults [nodes ...]`` (default 1e5; a few minutes, Linux):
+one Krylov step of the bench case per size, with transparent huge pages as the system
+has them and off for the process (``prctl``): step time, user and system CPU time, and
+the minor page faults of the step and of its preconditioner builds (with huge pages off
+each is 4 kB of freshly touched memory).
 """
 
 import dataclasses
@@ -418,6 +424,49 @@ def _memory(label):
           f"{kb['VmHWM'] * 1.024e-3:8.0f} MB", flush=True)
 
 
+def _faulting_step(nodes, huge_pages):
+    """One Krylov step (child process): step [s], user and system CPU [s], minor faults
+    of the step and of its preconditioner builds."""
+    import ctypes
+    import resource
+
+    import soil.coupling
+
+    if not huge_pages:                                # PR_SET_THP_DISABLE
+        ctypes.CDLL(None, use_errno=True).prctl(41, 1, 0, 0, 0)
+    original, built = soil.coupling.factorise, [0]
+
+    def counted(K, layout=None, symmetric=False):
+        before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+        solver = original(K, layout, symmetric)
+        built[0] += resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
+        return solver
+
+    soil.coupling.factorise = counted
+    before = resource.getrusage(resource.RUSAGE_SELF)
+    row = one_step("efg", nodes, "cam-clay", "krylov")
+    after = resource.getrusage(resource.RUSAGE_SELF)
+    return (row["step"], after.ru_utime - before.ru_utime, after.ru_stime - before.ru_stime,
+            after.ru_minflt - before.ru_minflt, built[0])
+
+
+def faults(sizes):
+    """Page faults and system time of one Krylov step per size, huge pages on and off."""
+    one_step("efg", 200, "cam-clay", "krylov")        # numba's caches, outside the runs
+    for nodes in sizes:
+        for huge_pages in (True, False):
+            out, status = in_child(_faulting_step, nodes, huge_pages, timeout=LIMIT)
+            label = f"{nodes} nodes, huge pages {'as set' if huge_pages else 'off'}"
+            if status != "ok":
+                print(f"{label}: {status}", flush=True)
+                continue
+            step, user, system, step_faults, build_faults = out
+            fresh = ("" if huge_pages else f"; {step_faults * 4096e-9:.1f} and "
+                     f"{build_faults * 4096e-9:.1f} GB of fresh memory")
+            print(f"{label}: step {step:.1f} s, user {user:.1f} s, system {system:.1f} s, "
+                  f"faults {step_faults:.3g} (builds {build_faults:.3g}{fresh})", flush=True)
+
+
 def memory(nodes):
     """Resident and peak memory around the first preconditioner of a Krylov step."""
     import efg.solver
@@ -559,6 +608,8 @@ if __name__ == "__main__":
         threads([int(float(n)) for n in sys.argv[2:]] or [100_000])
     elif sys.argv[1:2] == ["--schur"]:
         schur([int(float(n)) for n in sys.argv[2:]] or [3_000, 10_000])
+    elif sys.argv[1:2] == ["--faults"]:
+        faults([int(float(n)) for n in sys.argv[2:]] or [100_000])
     elif sys.argv[1:2] == ["--spectral"]:
         spectral([int(float(n)) for n in sys.argv[2:]] or [100_000])
     elif sys.argv[1:2] == ["--symmetric"]:
