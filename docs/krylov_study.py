@@ -498,13 +498,14 @@ def spectral(sizes):
     from pyamg.util.linalg import _approximate_eigenvalues
     from pyamg.util.utils import get_diagonal, scale_rows
 
-    from soil.krylov import _node_blocked
+    from soil.krylov import Krylov
 
     for nodes in sizes:
         K, layout = first_tangent(nodes, krylov=True)
-        blocked = _node_blocked(layout)
-        u = blocked[np.isin(layout.fields[blocked], (0, 1))]
-        A = sp.csr_matrix(sp.diags(1.0 / layout.scales[u]) @ sp.csr_matrix(K)[u][:, u])
+        precondition = Krylov(K, layout)              # its displacement order and scales
+        nu = precondition.sizes[0]
+        u, row = precondition.order[:nu], precondition.row[:nu]
+        A = sp.csr_matrix(sp.diags(row) @ sp.csr_matrix(K)[u][:, u])
         S = sp.bsr_matrix(A, blocksize=(2, 2))
         scaled = scale_rows(S, get_diagonal(S, inv=True), copy=True)      # as pyamg does
         for restart in ("complex", "real"):
