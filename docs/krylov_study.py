@@ -76,13 +76,6 @@ on the displacement block of the bench step's first tangent (scaled and in node 
 until the relative error is below 0.01): the restart vector's type, time, estimate and
 error, as pyamg restarts (from the complex Ritz vector) and from its real part.
 
-``python docs/krylov_study.py --carry [nodes] [steps]`` (default 1e5 nodes, 3 steps; about
-8 minutes at 1e5): the bench case as a whole run of that many steps on the Krylov
-back-end, the preconditioner carried from step to step (``soil.krylov.DRIFT`` as set)
-and built anew in every step (``DRIFT = 0``), each in its own forked process: wall time,
-phase times, preconditioner builds, Newton and FGMRES iterations per step, peak memory,
-and the largest difference of p and q between the two relative to their range.
-
 ``python docs/krylov_study.py --faults [nodes ...]`` (default 1e5; a few minutes, Linux):
 one Krylov step of the bench case per size, with transparent huge pages as the system
 has them and off for the process (``prctl``): step time, user and system CPU time, and
@@ -422,51 +415,6 @@ def unstabilised(nodes):
                 print(f"{nodes} nodes, stabilisation {kind}: failed: {err}", flush=True)
 
 
-def carry(nodes, count):
-    """Whole runs of the bench case in ``count`` steps, the preconditioner carried and
-    built anew in every step."""
-    import soil.krylov
-
-    rows = {}
-    for drift in (soil.krylov.DRIFT, 0.0):
-        row, status = in_child(_run_in_steps, nodes, count, drift, timeout=count * LIMIT)
-        label = f"DRIFT = {drift:g}"
-        if status != "ok":
-            print(f"{nodes:8d} {label}: {status}", flush=True)
-            continue
-        rows[drift] = row
-        print(f"{nodes:8d} {label}:", {k: v for k, v in row.items() if k not in ("p", "q")},
-              flush=True)
-    if len(rows) == 2:
-        carried, fresh = rows.values()
-        for column in ("p", "q"):
-            a, b = np.array(fresh[column]), np.array(carried[column])
-            print(f"  {column}: largest difference {np.abs(a - b).max() / np.abs(a).max():.1e}"
-                  " of its range", flush=True)
-
-
-def _run_in_steps(nodes, count, drift):
-    """The bench case in ``count`` steps with ``soil.krylov.DRIFT = drift``."""
-    import resource
-
-    import efg.solver
-    import soil.krylov
-
-    soil.krylov.DRIFT = drift
-    case = compression(nodes, "cam-clay", krylov=True)
-    case = dataclasses.replace(case, time=dataclasses.replace(case.time, steps=count))
-    tic = time.perf_counter()
-    with linear_solver("krylov"):
-        result = efg.solver.solve(case, progress=False)
-    s, history = result.summary, result.history
-    return {"wall_s": round(time.perf_counter() - tic, 1),
-            **{k: round(v, 1) for k, v in s["timings"].items() if k != "total_s"},
-            "builds": s["factorisations"], "newton": history.iterations.tolist(),
-            "fgmres": history.linear_iterations.tolist(),
-            "peak_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1.024e-3),
-            "p": history.p.tolist(), "q": history.q.tolist()}
-
-
 def _memory(label):
     """Print the process's resident and peak memory [MB] (Linux ``/proc``)."""
     with open("/proc/self/status") as fh:
@@ -661,9 +609,6 @@ if __name__ == "__main__":
         threads([int(float(n)) for n in sys.argv[2:]] or [100_000])
     elif sys.argv[1:2] == ["--schur"]:
         schur([int(float(n)) for n in sys.argv[2:]] or [3_000, 10_000])
-    elif sys.argv[1:2] == ["--carry"]:
-        arguments = [int(float(a)) for a in sys.argv[2:]]
-        carry(arguments[0] if arguments else 100_000, arguments[1] if arguments[1:] else 3)
     elif sys.argv[1:2] == ["--faults"]:
         faults([int(float(n)) for n in sys.argv[2:]] or [100_000])
     elif sys.argv[1:2] == ["--spectral"]:

@@ -86,7 +86,6 @@ class Points:
     reactions: np.ndarray = None  # (S,) vertical force on the soil per named segment
     cells: object = None     # efg.quadrature.Quadrature on ``nodes`` (the next step's)
     rcond: float = np.nan    # smallest MLS rcond at the last step's integration points
-    preconditioner: object = None  # soil.coupling.newton's kept one for the next step
 
 
 @dataclass
@@ -174,17 +173,13 @@ def _step(model, points, t0, t1, stats):
     """One step on the configuration of ``points``: new points, iterations, residual.
 
     The new points carry the background cells of their own configuration, on which the
-    next step integrates (and its history row measures them), the smallest rcond of
-    this step's MLS moment matrices (:func:`_min_rcond`) and the preconditioner Newton
-    keeps for the next step. The step takes the one ``points`` carry (a retried level
-    builds its own)."""
+    next step integrates (and its history row measures them), and the smallest rcond of
+    this step's MLS moment matrices (:func:`_min_rcond`)."""
     disc = _discretise(model, points.nodes, np.vstack([points.nodes, points.probes]),
                        stats["timings"], points.cells)
     system = _System(model, points, disc, t0, t1, stats["timings"])
-    kept, points.preconditioner = points.preconditioner, None
-    iterations, residual, kept = newton(system, stats, kept)
+    iterations, residual = newton(system, stats)
     done = system.finish()
-    done.preconditioner = kept
     with timed(stats["timings"], "cells_s"):
         done.cells = _cells(model, done.nodes)
     done.rcond = _min_rcond(disc)

@@ -266,7 +266,6 @@ class State:
     reactions: np.ndarray = None  # (S,) vertical force on the soil per named segment
     remeshes: int = 0        # re-meshings so far
     refused: int = 0         # re-meshings refused so far (not conforming, inadmissible)
-    preconditioner: object = None  # soil.coupling.newton's kept one for the next step
     remesh_residual: float = 0.0  # scaled equilibrium residual after the last re-meshing
 
 
@@ -360,15 +359,11 @@ def _discretise(model, topology, vertices, t1, timings):
 
 def _step(model, current, t0, t1, stats):
     """One step on the mesh at ``current.vertices``, then the re-meshing if it is due:
-    new state, iterations, residual. The new state carries the preconditioner Newton
-    keeps for the next step (none after a re-meshing); the step takes the one
-    ``current`` carries (a retried level builds its own)."""
+    new state, iterations, residual."""
     disc = _discretise(model, current.topology, current.vertices, t1, stats["timings"])
     system = _System(model, current, disc, t0, t1, stats["timings"])
-    kept, current.preconditioner = current.preconditioner, None
-    iterations, residual, kept = newton(system, stats, kept)
-    done = replace(system.finish(), preconditioner=kept)
-    return _remesh(model, done, t1, stats["timings"]), iterations, residual
+    iterations, residual = newton(system, stats)
+    return _remesh(model, system.finish(), t1, stats["timings"]), iterations, residual
 
 
 def _remesh(model, current, t, timings):
@@ -412,7 +407,7 @@ def _remesh(model, current, t, timings):
                   stretching=carried[:, 4:8], topology=topology,
                   velocity=vertex_interpolant(ub, topology.space.mesh0.facets,
                                               velocity).T.ravel(),
-                  remeshes=current.remeshes + 1, preconditioner=None)
+                  remeshes=current.remeshes + 1)
     new.remesh_residual = _imbalance(model, new, t, timings)
     return new
 

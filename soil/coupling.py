@@ -184,7 +184,7 @@ def new_counts():
             "factor_flops": 0.0, "linear_iterations": 0}
 
 
-def newton(system, stats, kept=None):
+def newton(system, stats):
     """Newton's method on one step's nonlinear system.
 
     Modified Newton: a factorisation is kept while each iteration contracts the residual
@@ -199,13 +199,10 @@ def newton(system, stats, kept=None):
 
     With the Krylov back-end a "factorisation" is a preconditioner, and Newton is
     Newton: every iteration assembles the current tangent and hands it to the
-    solver (:meth:`soil.krylov.Krylov.adopt`), which keeps its preconditioner: the one
-    the last step handed over (``kept``), or the one of the step's first tangent. Each
-    correction is solved inexactly, to the relative residual of
-    :func:`soil.linear.forcing` (Eisenstat-Walker): loosely far from the solution,
-    tightly near it. A solve that fails with a handed-over preconditioner is repeated
-    with one built from the current tangent; the one it returns (``kept``) is for the
-    next step.
+    solver (:meth:`soil.krylov.Krylov.adopt`), which keeps the preconditioner of the
+    step's first tangent. Each correction is solved inexactly, to the
+    relative residual of :func:`soil.linear.forcing` (Eisenstat-Walker): loosely far from
+    the solution, tightly near it.
 
     Parameters
     ----------
@@ -224,9 +221,6 @@ def newton(system, stats, kept=None):
         ``linear_iterations`` (Krylov iterations) and ``timings`` (``assembly_s``,
         ``solve_s``); ``linear_solver`` set to the back-end of the last factorisation
         (:func:`soil.linear.identity`).
-    kept : object, optional
-        A preconditioner the last step handed over (the ``kept`` this function returned
-        there); None: build one.
 
     Returns
     -------
@@ -234,9 +228,6 @@ def newton(system, stats, kept=None):
         Residual evaluations, the converged one included.
     residual : float
         The converged scaled residual (< :data:`TOLERANCE`).
-    kept : object or None
-        What the solver hands the next step (``carried()`` of :func:`soil.linear.factorise`'s
-        object): a Krylov preconditioner, or None.
 
     Raises
     ------
@@ -260,18 +251,17 @@ def newton(system, stats, kept=None):
     ...     def advance(self, dx):
     ...         self.x = self.x + dx
     >>> root, stats = Root(), {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
-    >>> iterations, residual, kept = newton(root, stats)
+    >>> iterations, residual = newton(root, stats)
     >>> round(float(root.x[0]), 8), stats["factorisations"], bool(residual < TOLERANCE)
     (1.41421356, 2, True)
     """
-    lu, previous, eta, handed = kept, np.inf, FORCING_MAX, kept is not None
-    del kept                                # lu holds it: a new build may free it
+    lu, previous, eta = None, np.inf, FORCING_MAX
     for iteration in range(1, MAX_ITERATIONS + 1):
         R, residual = system.residual()
         if not np.isfinite(residual):
             raise FloatingPointError("the residual is not finite")
         if residual < TOLERANCE:
-            return iteration, residual, None if lu is None else lu.carried()
+            return iteration, residual
         if iteration == MAX_ITERATIONS:
             raise ConvergenceError(f"Newton residual {residual:.2e} after {iteration} "
                                    "iterations")
@@ -282,40 +272,17 @@ def newton(system, stats, kept=None):
             with timed(stats["timings"], "assembly_s"):
                 K = system.tangent()
             if first or not lu.adopt(K):
-                lu, handed = None, False    # and one factorisation
-                lu = _factorised(K, system.layout, stats, SYMMETRIC_FIRST and first)
+                lu = None                   # and one factorisation
+                with timed(stats["timings"], "solve_s"):
+                    lu = factorise(K, system.layout, symmetric=SYMMETRIC_FIRST and first)
+                _count(stats, lu)
             del K                           # the solver holds what it needs
         eta = forcing(residual, previous, eta, TOLERANCE)
-        previous = residual
-        try:
-            dx = _solved(lu, -R, eta, stats)
-        except ConvergenceError:
-            if not handed:
-                raise
-            K, lu, handed = lu.K, None, False
-            lu = _factorised(K, system.layout, stats)
-            del K
-            dx = _solved(lu, -R, eta, stats)
-        system.advance(dx)
-
-
-def _factorised(K, layout, stats, symmetric=False):
-    """:func:`soil.linear.factorise`, timed and counted (:func:`_count`)."""
-    with timed(stats["timings"], "solve_s"):
-        lu = factorise(K, layout, symmetric=symmetric)
-    _count(stats, lu)
-    return lu
-
-
-def _solved(lu, b, rtol, stats):
-    """``lu.solve(b, rtol)``, timed, its Krylov iterations counted (those of a failed
-    solve too)."""
-    before = lu.iterations
-    try:
+        previous, before = residual, lu.iterations
         with timed(stats["timings"], "solve_s"):
-            return lu.solve(b, rtol=rtol)
-    finally:
+            dx = lu.solve(-R, rtol=eta)
         stats["linear_iterations"] += lu.iterations - before
+        system.advance(dx)
 
 
 def _count(stats, lu):

@@ -93,12 +93,6 @@ SIDE_BY_SIDE_FROM = 10_000
 #: FGMRES takes 25 iterations to 1e-8 either way, the inverses take half the memory, the
 #: rows two thirds, and the solve about a tenth less time (scratch timing).
 INVERSES = ROWS = np.float32
-#: A preconditioner is handed to the next step (:meth:`Krylov.carried`) while a step's
-#: solves take at most this many times the FGMRES iterations per solve of the step that
-#: built it. Beyond it the extra iterations cost about what a new build does: at 10^5
-#: EFG nodes a build (7 s) costs about as much as the step's solves (73 iterations at
-#: 0.12 s; ``make bench``'s phase times).
-DRIFT = 2.0
 #: The smoother of every level Schwarz does not smooth: symmetric Gauss-Seidel on the
 #: matrix's blocks (nodes; pyamg's default).
 GAUSS_SEIDEL = ("block_gauss_seidel", {"sweep": "symmetric"})
@@ -114,11 +108,8 @@ class Krylov:
 
     Attributes
     ----------
-    iterations, solves : int
-        FGMRES iterations and solves so far.
-    baseline : float or None
-        FGMRES iterations per solve of the step that built it (None until that step
-        ends, :meth:`carried`).
+    iterations : int
+        FGMRES iterations of all solves so far.
     backend : str
         ``"krylov"`` (:func:`soil.linear.backend`).
     symmetric, perturbed_pivots, flops
@@ -141,8 +132,7 @@ class Krylov:
         p, other = np.flatnonzero(fields == 2), np.flatnonzero(fields < 0)
         self.order, self.sizes = np.concatenate([u, p, other]), (len(u), len(p))
         self.row = 1.0 / layout.scales[self.order]
-        self.iterations = self.solves = 0
-        self.baseline, self._mark = None, (0, 0)
+        self.iterations = 0
         nu, nm = len(u), len(u) + len(p)
         scaled = sp.csr_matrix(sp.diags(self.row) @ _permuted(sp.csr_matrix(K), self.order))
         A, self.B, self.F = scaled[:nu, :nu], scaled[:nu, nu:nm], scaled[nm:, :nm]
@@ -163,26 +153,10 @@ class Krylov:
 
     def adopt(self, K):
         """Solve with the tangent ``K`` from now on, keeping the preconditioner (built
-        from an earlier tangent: within a step, and from step to step, the tangent
-        changes little). Returns True, or False for a tangent of another size (a new
-        mesh): that one needs a preconditioner of its own."""
-        if K.shape[0] != len(self.order):
-            return False
+        from the first tangent of the Newton step: within a step the tangent changes
+        little). Returns True."""
         self.K = sp.csr_matrix(K)
         return True
-
-    def carried(self):
-        """This preconditioner for the next step, its tangent dropped, or None (the next
-        step builds its own) when the step that just ended took more than :data:`DRIFT`
-        times the FGMRES iterations per solve of the step that built it. Newton calls it
-        once a step has converged."""
-        iterations, solves = (self.iterations - self._mark[0], self.solves - self._mark[1])
-        self._mark = (self.iterations, self.solves)
-        rate = iterations / max(solves, 1)
-        if self.baseline is None:
-            self.baseline = rate
-        self.release()
-        return self if rate <= DRIFT * self.baseline else None
 
     def release(self):
         """Drop the tangent (the preconditioner stays) until the next :meth:`adopt`:
@@ -230,7 +204,6 @@ class Krylov:
                       maxiter=-(-MAX_ITERATIONS // RESTART),
                       residuals=residuals)
         self.iterations += len(residuals) - 1
-        self.solves += 1
         if residuals[0] and residuals[-1] > max(1.01 * rtol, NO_PROGRESS) * residuals[0]:
             raise ConvergenceError(f"FGMRES relative residual {residuals[-1] / residuals[0]:.1e}"
                                    f" after {len(residuals) - 1} iterations (wanted "

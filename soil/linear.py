@@ -308,9 +308,7 @@ def factorise(K, layout=None, symmetric=False):
         ``backend``: the back-end's name (:func:`backend`); ``current``: whether Newton
         should hand it each new tangent (``adopt(K)``,
         False when it cannot solve with ``K`` and ``K`` must be factorised anew: the
-        direct ones never can, the Krylov one can, through its preconditioner, while the
-        size stays); ``carried()``: what Newton hands the next step (None for the direct
-        ones; the Krylov one, :meth:`soil.krylov.Krylov.carried`).
+        direct ones never can, the Krylov one always can, through its preconditioner).
 
     Raises
     ------
@@ -346,9 +344,6 @@ class _Factor:
 
     def release(self):
         """Nothing: a factorisation holds no tangent Newton could free."""
-
-    def carried(self):
-        """None: the next step factorises its own tangent."""
 
 
 class _SuperLU(_Factor):

@@ -112,39 +112,6 @@ def test_newton_falls_back_to_K_when_sym_K_stalls(monkeypatch, name, skew):
     assert stats["factorisations"] == symmetric + unsymmetric
 
 
-class Stalled:
-    """A handed-over preconditioner whose solves fail after 7 iterations."""
-
-    current, iterations, K = True, 0, None
-    backend, symmetric, perturbed_pivots, flops = "superlu", False, 0, 0.0
-
-    def release(self):
-        self.K = None
-
-    def adopt(self, K):
-        self.K = K
-        return True
-
-    def solve(self, b, rtol=None):
-        self.iterations += 7
-        raise ConvergenceError("stalled")
-
-
-def test_newton_replaces_a_handed_over_preconditioner_that_fails(monkeypatch):
-    """A solve that fails with the preconditioner the last step handed over is repeated
-    with a factorisation of the current tangent (counted, and so are the failed solve's
-    iterations); one that fails with the step's own build is an error."""
-    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "superlu")
-    K, groups, b = saddle(20)
-    system, stats = Linear(K, groups, b), {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
-    iterations, residual, kept = newton(system, stats, Stalled())
-    assert residual < soil.coupling.TOLERANCE and kept is None
-    assert stats["factorisations"] == 1 and stats["linear_iterations"] == 7
-    monkeypatch.setattr(soil.coupling, "factorise", lambda *args, **kwargs: Stalled())
-    with pytest.raises(ConvergenceError, match="stalled"):
-        newton(Linear(K, groups, b), stats)
-
-
 def test_singular_tangent_is_a_convergence_error(monkeypatch):
     monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "superlu")
     with pytest.raises(ConvergenceError, match="singular"):
