@@ -86,6 +86,7 @@ each is 4 kB of freshly touched memory).
 import dataclasses
 import sys
 import time
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -270,6 +271,19 @@ def whole_runs():
                           flush=True)
 
 
+@contextmanager
+def _factorising(wrap):
+    """``soil.coupling.factorise`` replaced by ``wrap(original)`` inside the block."""
+    import soil.coupling
+
+    original = soil.coupling.factorise
+    soil.coupling.factorise = wrap(original)
+    try:
+        yield
+    finally:
+        soil.coupling.factorise = original
+
+
 class _Captured(Exception):
     """The first tangent of a step, and its layout."""
 
@@ -294,19 +308,17 @@ def first_tangent(nodes, krylov=False):
     """The first Newton tangent of one bench step (EFG, Cam-clay; ``krylov``: with
     Nitsche's conditions and the perturbation stabilisation) and its layout."""
     import efg.solver
-    import soil.coupling
 
-    def capture(K, layout=None, symmetric=False):
-        raise _Captured(K, layout)
+    def capture(original):
+        def captured(K, layout=None, symmetric=False):
+            raise _Captured(K, layout)
+        return captured
 
-    original, soil.coupling.factorise = soil.coupling.factorise, capture
     try:
-        with linear_solver("pardiso"):
+        with _factorising(capture), linear_solver("pardiso"):
             efg.solver.solve(compression(nodes, krylov=krylov), progress=False)
     except _Captured as captured:
         return captured.args
-    finally:
-        soil.coupling.factorise = original
     raise RuntimeError("the step did not factorise")
 
 
@@ -430,21 +442,21 @@ def _faulting_step(nodes, huge_pages):
     import ctypes
     import resource
 
-    import soil.coupling
-
     if not huge_pages:                                # PR_SET_THP_DISABLE
         ctypes.CDLL(None, use_errno=True).prctl(41, 1, 0, 0, 0)
-    original, built = soil.coupling.factorise, [0]
+    built = [0]
 
-    def counted(K, layout=None, symmetric=False):
-        before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
-        solver = original(K, layout, symmetric)
-        built[0] += resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
-        return solver
+    def count(original):
+        def counted(K, layout=None, symmetric=False):
+            before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+            solver = original(K, layout, symmetric)
+            built[0] += resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
+            return solver
+        return counted
 
-    soil.coupling.factorise = counted
     before = resource.getrusage(resource.RUSAGE_SELF)
-    row = one_step("efg", nodes, "cam-clay", "krylov")
+    with _factorising(count):
+        row = one_step("efg", nodes, "cam-clay", "krylov")
     after = resource.getrusage(resource.RUSAGE_SELF)
     return (row["step"], after.ru_utime - before.ru_utime, after.ru_stime - before.ru_stime,
             after.ru_minflt - before.ru_minflt, built[0])
@@ -470,26 +482,32 @@ def faults(sizes):
 def memory(nodes):
     """Resident and peak memory around the first preconditioner of a Krylov step."""
     import efg.solver
-    import soil.coupling
 
-    original = soil.coupling.factorise
-
-    def watched(K, layout=None, symmetric=False):
-        _memory(f"tangent assembled ({K.nnz:.2e} entries)")
-        solver = original(K, layout, symmetric)
-        _memory("preconditioner built")
-        return solver
+    def watch(original):
+        def watched(K, layout=None, symmetric=False):
+            _memory(f"tangent assembled ({K.nnz:.2e} entries)")
+            solver = original(K, layout, symmetric)
+            _memory("preconditioner built")
+            return solver
+        return watched
 
     case = compression(nodes, krylov=True)
     print(f"{len(case.nodes())} nodes, krylov:", flush=True)
     _memory("before the step")
-    soil.coupling.factorise = watched
-    try:
-        with linear_solver("krylov"):
-            efg.solver.solve(case, progress=False)
-    finally:
-        soil.coupling.factorise = original
+    with _factorising(watch), linear_solver("krylov"):
+        efg.solver.solve(case, progress=False)
     _memory("after the step")
+
+
+def _scaled(K, precondition, count):
+    """The tangent ``K`` on the first ``count`` unknowns of the order of the Krylov
+    ``precondition``, rows scaled as it scales them."""
+    import scipy.sparse as sp
+
+    from soil.krylov import _permuted
+
+    permuted = _permuted(sp.csr_matrix(K), precondition.order)
+    return sp.csr_matrix(sp.diags(precondition.row) @ permuted)[:count, :count]
 
 
 def spectral(sizes):
@@ -503,10 +521,7 @@ def spectral(sizes):
     for nodes in sizes:
         K, layout = first_tangent(nodes, krylov=True)
         precondition = Krylov(K, layout)              # its displacement order and scales
-        nu = precondition.sizes[0]
-        u, row = precondition.order[:nu], precondition.row[:nu]
-        A = sp.csr_matrix(sp.diags(row) @ sp.csr_matrix(K)[u][:, u])
-        S = sp.bsr_matrix(A, blocksize=(2, 2))
+        S = sp.bsr_matrix(_scaled(K, precondition, precondition.sizes[0]), blocksize=(2, 2))
         scaled = scale_rows(S, get_diagonal(S, inv=True), copy=True)      # as pyamg does
         for restart in ("complex", "real"):
             np.random.seed(0)
@@ -534,7 +549,7 @@ def schur(sizes):
     import scipy.sparse.linalg as spla
     from pyamg.krylov import fgmres
 
-    from soil.krylov import RESTART, Krylov, _amg, _permuted, _rigid_modes
+    from soil.krylov import RESTART, Krylov, _amg, _rigid_modes
 
     for nodes in sizes:
         K, layout = first_tangent(nodes, krylov=True)
@@ -542,7 +557,7 @@ def schur(sizes):
         nu, n_p = precondition.sizes
         order = precondition.order[:nu + n_p]
         row = precondition.row[:nu + n_p]
-        scaled = sp.csr_matrix(sp.diags(row) @ _permuted(sp.csr_matrix(K), order))
+        scaled = _scaled(K, precondition, nu + n_p)
         A, B = scaled[:nu, :nu], scaled[:nu, nu:]
         C, D = scaled[nu:, :nu], scaled[nu:, nu:]
         s = -precondition.sign_p
