@@ -596,8 +596,8 @@ def schur(sizes):
                     return np.concatenate([solve_A(r[:nu] - B @ y_p), y_p])
 
                 residuals, tic = [], time.perf_counter()
-                fgmres(scaled, b, M=spla.LinearOperator(scaled.shape, apply), tol=1e-8,
-                       restart=RESTART, maxiter=10, residuals=residuals)
+                fgmres(scaled, b, M=spla.LinearOperator(scaled.shape, apply, dtype=float),
+                       tol=1e-8, restart=RESTART, maxiter=10, residuals=residuals)
                 print(f"  A {a_name:17s} S {p_name:30s}: {len(residuals) - 1:4d} "
                       f"iterations, {time.perf_counter() - tic:5.1f} s", flush=True)
 
