@@ -36,6 +36,8 @@ MAX_ITERATIONS = 25
 #: (:func:`soil.linear.factorise`; every refactorisation is of ``K``). Off: the tangents
 #: are not symmetric enough for it to pay (README, "Speed").
 SYMMETRIC_FIRST = False
+#: Halvings of a Newton correction whose iterate the material cannot take.
+BACKTRACKS = 4
 #: Halvings of a failing time step before the run stops.
 MAX_CUTS = 6
 #: Phase timers of a run [s], ``summary["timings"]`` of both methods (plus ``total_s``):
@@ -255,9 +257,9 @@ def newton(system, stats):
     >>> round(float(root.x[0]), 8), stats["factorisations"], bool(residual < TOLERANCE)
     (1.41421356, 2, True)
     """
-    lu, previous, eta = None, np.inf, FORCING_MAX
+    lu, previous, eta, dx = None, np.inf, FORCING_MAX, None
     for iteration in range(1, MAX_ITERATIONS + 1):
-        R, residual = system.residual()
+        R, residual = _residual(system, dx)
         if not np.isfinite(residual):
             raise FloatingPointError("the residual is not finite")
         if residual < TOLERANCE:
@@ -283,6 +285,26 @@ def newton(system, stats):
             dx = lu.solve(-R, rtol=eta)
         stats["linear_iterations"] += lu.iterations - before
         system.advance(dx)
+
+
+def _residual(system, dx):
+    """``system.residual()`` at the iterate, the last correction ``dx`` halved (up to
+    :data:`BACKTRACKS` times) while the iterate is one the material or the kinematics
+    cannot take (a :class:`ConvergenceError`: a return mapping that fails, an inverted
+    point). If every halving fails, the full correction's error is raised."""
+    try:
+        return system.residual()
+    except ConvergenceError as failure:
+        if dx is None:
+            raise
+        for _ in range(BACKTRACKS):
+            dx = dx / 2
+            system.advance(-dx)
+            try:
+                return system.residual()
+            except ConvergenceError:
+                pass
+        raise failure
 
 
 def _count(stats, lu):

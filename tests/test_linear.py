@@ -112,6 +112,47 @@ def test_newton_falls_back_to_K_when_sym_K_stalls(monkeypatch, name, skew):
     assert stats["factorisations"] == symmetric + unsymmetric
 
 
+class Fenced:
+    """``x^2 = 2`` from ``x = 1`` whose residual, like a return mapping, cannot be
+    evaluated from ``x = fence`` on: Newton's first correction lands at 1.5."""
+
+    layout, x, fence = None, np.array([1.0]), 1.45
+
+    def residual(self):
+        if self.x[0] >= self.fence:
+            raise ConvergenceError("return mapping did not converge")
+        return self.x**2 - 2, abs(self.x[0]**2 - 2)
+
+    def tangent(self):
+        return sp.csr_matrix(2 * self.x[None])
+
+    def advance(self, dx):
+        self.x = self.x + dx
+
+
+@pytest.mark.parametrize("backtracks, converges", [(4, True), (0, False)])
+def test_newton_halves_a_correction_the_material_cannot_take(monkeypatch, backtracks,
+                                                             converges):
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "superlu")
+    monkeypatch.setattr(soil.coupling, "BACKTRACKS", backtracks)
+    system, stats = Fenced(), {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
+    if not converges:
+        with pytest.raises(ConvergenceError, match="return mapping"):
+            newton(system, stats)
+        return
+    newton(system, stats)
+    assert abs(system.x[0] - np.sqrt(2)) < 1e-8
+
+
+def test_a_first_iterate_the_material_cannot_take_fails_the_step(monkeypatch):
+    """Nothing to halve at a step's start: the step fails (and the march cuts it)."""
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "superlu")
+    system = Fenced()
+    system.fence = 0.5
+    with pytest.raises(ConvergenceError, match="return mapping"):
+        newton(system, {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)})
+
+
 def test_singular_tangent_is_a_convergence_error(monkeypatch):
     monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "superlu")
     with pytest.raises(ConvergenceError, match="singular"):
