@@ -206,6 +206,11 @@ def newton(system, stats):
     relative residual of :func:`soil.linear.forcing` (Eisenstat-Walker): loosely far from
     the solution, tightly near it.
 
+    A correction whose iterate the material or the kinematics cannot take (a return
+    mapping that fails, an inverted point) is halved, up to :data:`BACKTRACKS` times
+    (:func:`_residual`), before the step fails: past a peak, full Newton's corrections
+    can overshoot into such states.
+
     Parameters
     ----------
     system : object
