@@ -7,12 +7,13 @@ runs). Its exact solution is homogeneous, and MLS with a linear basis reproduces
 homogeneous field on any layout, so the spread of q and p_w over the nodes measures how
 far a run has left that solution.
 
-``python docs/post_peak_study.py --branches`` (about 16 minutes on 2 cores): the case
-three ways: PARDISO's modified Newton (the default), full Newton on PARDISO (the current
-tangent factorised at every iteration, ``soil.linear.CONTRACTION = 0``) and the Krylov
-back-end. Prints time, Newton and FGMRES iterations, cut-backs and the largest q, and
-every 2 s the spread (largest minus smallest) of q and of p_w over the nodes relative to
-their mean magnitude.
+``python docs/post_peak_study.py --branches`` (about 18 minutes on 2 cores): the case
+with EFG three ways: PARDISO's modified Newton (the default), full Newton on PARDISO (the
+current tangent factorised at every iteration, ``soil.linear.CONTRACTION = 0``) and the
+Krylov back-end; then with fem-th and fem-p1p1-stab on the same nodes (PARDISO's
+modified Newton). Prints time, Newton and FGMRES iterations, cut-backs and the largest
+q, and every 2 s the spread (largest minus smallest) of q and of p_w over the nodes
+relative to their mean magnitude.
 
 ``python docs/post_peak_study.py --tangent [t ...]`` (default 2 8 11.6 14 18.4; about 3
 minutes): the PARDISO run's steps ending at those times, at their start and after one and
@@ -34,6 +35,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 import efg.solver
+import fem_reference.solver
 import soil.linear
 from soil.coupling import TIMERS
 from soil.errors import ConvergenceError
@@ -50,29 +52,37 @@ def case():
     return load_case("unconfined-compression", GRID)
 
 
+#: The runs of ``--branches``: method, linear solver, label, ``soil.linear.CONTRACTION``.
+PATHS = (("efg", "pardiso", "modified Newton", soil.linear.CONTRACTION),
+         ("efg", "pardiso", "full Newton", 0.0),
+         ("efg", "krylov", "Newton", soil.linear.CONTRACTION),
+         ("fem-th", "pardiso", "modified Newton", soil.linear.CONTRACTION),
+         ("fem-p1p1-stab", "pardiso", "modified Newton", soil.linear.CONTRACTION))
+
+
 def branches():
-    """The case on the three paths of ``--branches``."""
-    paths = (("pardiso", "modified Newton", soil.linear.CONTRACTION),
-             ("pardiso", "full Newton", 0.0), ("krylov", "Newton", soil.linear.CONTRACTION))
+    """The case on the paths of :data:`PATHS`."""
     kept = soil.linear.CONTRACTION
-    for solver, label, contraction in paths:
+    for method, solver, label, contraction in PATHS:
         soil.linear.CONTRACTION = contraction
         try:
-            _branch(solver, label)
+            _branch(method, solver, label)
         finally:
             soil.linear.CONTRACTION = kept
 
 
-def _branch(solver, label):
+def _branch(method, solver, label):
+    name = f"{method} on {solver}, {label}"
     with linear_solver(solver):
         tic = time.perf_counter()
         try:
-            result = efg.solver.solve(case(), progress=False)
+            result = (efg.solver.solve(case(), progress=False) if method == "efg" else
+                      fem_reference.solver.solve(case(), method, progress=False))
         except ConvergenceError as err:
-            print(f"{solver} {label}: failed after {time.perf_counter() - tic:.0f} s: {err}")
+            print(f"{name}: failed after {time.perf_counter() - tic:.0f} s: {err}")
             return
     s = result.summary
-    print(f"{solver} {label}: {time.perf_counter() - tic:.0f} s, Newton "
+    print(f"{name}: {time.perf_counter() - tic:.0f} s, Newton "
           f"{s['newton_iterations']}, FGMRES {s['linear_iterations']}, cut-backs "
           f"{s['cutbacks']}, largest q {result.history.q.max():.6f} kPa", flush=True)
     for snap in result.snapshots:
