@@ -49,6 +49,7 @@ GRID = ["discretisation.nx=25", "discretisation.ny=33", "discretisation.layout=g
 
 
 def case():
+    """The study's case (:data:`GRID`)."""
     return load_case("unconfined-compression", GRID)
 
 
@@ -97,13 +98,13 @@ class _Reached(Exception):
 
 
 def _steps(times):
-    """``(time, model, points, t0, t1)`` at the start of the PARDISO run's steps that end
-    at ``times``."""
+    """``(model, points, t0, t1)`` at the start of the PARDISO run's steps that end at
+    ``times``."""
     taken, step = [], efg.solver._step
 
     def capture(model, points, t0, t1, stats):
         if any(abs(t1 - t) < 1e-9 for t in times):
-            taken.append((t1, model, points, t0, t1))
+            taken.append((model, points, t0, t1))
             if len(taken) == len(times):
                 raise _Reached
         return step(model, points, t0, t1, stats)
@@ -122,7 +123,7 @@ def _steps(times):
 def tangent(times):
     """``--tangent``: finite differences and preconditioners at ``times``."""
     rng = np.random.default_rng(0)
-    for t, model, points, t0, t1 in _steps(times):
+    for model, points, t0, t1 in _steps(times):
         timings = dict.fromkeys(TIMERS, 0.0)
         disc = efg.solver._discretise(model, points.nodes,
                                       np.vstack([points.nodes, points.probes]), timings,
@@ -137,7 +138,7 @@ def tangent(times):
             if scale is None:
                 scale = np.abs(dx[:2 * n]).max(), np.abs(dx[2 * n:3 * n]).max()
                 first = Krylov(K, system.layout)
-            print(f"t = {t:4.1f} s, iterate {iterate}, scaled residual {residual:.1e}")
+            print(f"t = {t1:4.1f} s, iterate {iterate}, scaled residual {residual:.1e}")
             directions = {
                 "Newton": dx * scale[0] / np.abs(dx[:2 * n]).max(),
                 "random u": np.r_[scale[0] * rng.standard_normal(2 * n), 0 * dx[2 * n:]],
