@@ -499,7 +499,7 @@ def memory(nodes):
     _memory("after the step")
 
 
-def _scaled(K, precondition, count):
+def scaled_tangent(K, precondition, count):
     """The tangent ``K`` on the first ``count`` unknowns of the order of the Krylov
     ``precondition``, rows scaled as it scales them."""
     import scipy.sparse as sp
@@ -521,7 +521,8 @@ def spectral(sizes):
     for nodes in sizes:
         K, layout = first_tangent(nodes, krylov=True)
         precondition = Krylov(K, layout)              # its displacement order and scales
-        S = sp.bsr_matrix(_scaled(K, precondition, precondition.sizes[0]), blocksize=(2, 2))
+        S = sp.bsr_matrix(scaled_tangent(K, precondition, precondition.sizes[0]),
+                          blocksize=(2, 2))
         scaled = scale_rows(S, get_diagonal(S, inv=True), copy=True)      # as pyamg does
         for restart in ("complex", "real"):
             np.random.seed(0)
@@ -557,7 +558,7 @@ def schur(sizes):
         nu, n_p = precondition.sizes
         order = precondition.order[:nu + n_p]
         row = precondition.row[:nu + n_p]
-        scaled = _scaled(K, precondition, nu + n_p)
+        scaled = scaled_tangent(K, precondition, nu + n_p)
         A, B = scaled[:nu, :nu], scaled[:nu, nu:]
         C, D = scaled[nu:, :nu], scaled[nu:, nu:]
         s = -precondition.sign_p

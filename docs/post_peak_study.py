@@ -39,9 +39,11 @@ import fem_reference.solver
 import soil.linear
 from soil.coupling import TIMERS
 from soil.errors import ConvergenceError
-from soil.krylov import MAX_ITERATIONS, Krylov, _permuted
+from soil.krylov import MAX_ITERATIONS, Krylov
 from soil.linear import linear_solver
 from soil.problems import load_case
+
+from krylov_study import scaled_tangent   # docs/, this script's folder
 
 #: Grid k = 8 of the case's 3 x 4 m quarter: 25 x 33 nodes, spacing 0.125 m.
 GRID = ["discretisation.nx=25", "discretisation.ny=33", "discretisation.layout=grid",
@@ -153,14 +155,13 @@ def tangent(times):
 
 def _difference(system, K, v, h, n):
     """Central difference of the residual along ``v`` against ``K v``: the relative
-    error of the displacement and the pressure rows."""
-    x = system.du.copy(), system.p.copy(), system.plate, system.lam
+    error of the displacement and the pressure rows. The system is left at its
+    iterate."""
     values = []
-    for sign in (1, -1):
-        system.du, system.p, system.plate, system.lam = x[0].copy(), x[1].copy(), *x[2:]
-        system.advance(sign * h * v)
+    for step in (h * v, -2 * h * v):
+        system.advance(step)
         values.append(system.residual()[0])
-    system.du, system.p, system.plate, system.lam = x
+    system.advance(h * v)
     error, Kv = (values[0] - values[1]) / (2 * h) - K @ v, K @ v
     rows = slice(0, 2 * n), slice(2 * n, 3 * n)
     u, p = (np.linalg.norm(error[r]) / max(np.linalg.norm(Kv[r]), 1e-300) for r in rows)
@@ -172,7 +173,7 @@ def _preconditioners(K, R, layout, first):
     1e-8 with three preconditioners."""
     own = Krylov(K, layout)
     nu = own.sizes[0]
-    A = (sp.diags(own.row) @ _permuted(sp.csr_matrix(K), own.order))[:nu, :nu].toarray()
+    A = scaled_tangent(K, own, nu).toarray()
     eigenvalues = np.linalg.eigvalsh((A + A.T) / 2)
     first.adopt(K)
     counts = {"own": _iterations(own, R), "step's first": _iterations(first, R)}
