@@ -18,6 +18,18 @@ their times and flops, one back-solve of each, and FGMRES on ``K`` preconditione
 LDL^T (rows scaled as Newton scales them) to 1e-4, 1e-8 and 1e-10: iterations, time and
 the largest difference from the LU solution relative to its largest entry.
 
+``python docs/krylov_study.py --single [nodes ...]`` (default 3e4 1e5; about 15 minutes):
+PARDISO's factorisation of the first tangent of the bench step as the Krylov sizes run it
+(Nitsche, stabilised) in double and in single precision: time, flops, perturbed pivots,
+the factor's memory (``iparm(17)``) and the scaled residual after each refinement of one
+solve; one whole step of EFG (so conditioned), fem-th and fem-p1p1-stab with each, each
+in its own forked process (step and solve time, Newton iterations, factorisations, peak
+memory); then whole runs of the built-in cases (as ``--runs``, and EFG's with the
+perturbation too) with each: Newton iterations, factorisations, cut-backs, and the
+largest difference of p, q and the settlement relative to their range. Single precision
+is forced on every discretisation that suits an iterative solver
+(``soil.linear.Layout.iterative``), whether it asks for it (``Layout.single``) or not.
+
 ``python docs/krylov_study.py --newton [nodes] [forcing ...]`` (default 3e3 nodes,
 forcings 1e-2 1e-4; under a minute): the Newton iterations of the bench step on the
 Krylov back-end with each largest forcing (``soil.linear.FORCING_MAX``): the scaled
@@ -87,6 +99,7 @@ import dataclasses
 import sys
 import time
 from contextlib import contextmanager
+from functools import partial
 
 import numpy as np
 
@@ -124,34 +137,41 @@ def steps(sizes):
                   flush=True)
 
 
-def runs():
-    """Whole runs of :data:`RUNS` on PARDISO and on the Krylov back-end."""
+def runs(variants=None, cases=RUNS):
+    """Whole runs of ``cases`` (:data:`RUNS`; an optional fourth entry is EFG's
+    stabilisation) under each of ``variants`` (name: a function returning a context
+    manager; default: on PARDISO and on the Krylov back-end)."""
     import efg.solver
     import fem_reference.solver
 
-    for name, method, essential in RUNS:
+    variants = variants or {solver: partial(linear_solver, solver)
+                            for solver in ("pardiso", "krylov")}
+    for name, method, essential, *stabilisation in cases:
         case = load_case(name)
         if essential:
-            case = dataclasses.replace(case, efg=dataclasses.replace(case.efg,
-                                                                     essential=essential))
-        histories = {}
-        for solver in ("pardiso", "krylov"):
-            with linear_solver(solver):
+            case = dataclasses.replace(case, efg=dataclasses.replace(
+                case.efg, essential=essential, stabilisation=(stabilisation or
+                                                              [case.efg.stabilisation])[0]))
+        histories, label = {}, " ".join([name, method, str(essential), *stabilisation])
+        for variant, within in variants.items():
+            with within():
                 tic = time.perf_counter()
                 try:
                     result = (efg.solver.solve(case, progress=False) if method == "efg"
                               else fem_reference.solver.solve(case, method, progress=False))
                 except ConvergenceError as err:
-                    print(f"{name} {method} {essential} {solver}: failed: {err}", flush=True)
+                    print(f"{label} {variant}: failed: {err}", flush=True)
                     continue
                 s = result.summary
-                histories[solver] = result.history
-                print(f"{name} {method} {essential} {solver}: "
+                histories[variant] = result.history
+                print(f"{label} {variant}: "
                       f"{time.perf_counter() - tic:.1f} s, Newton {s['newton_iterations']}, "
+                      f"factorisations {s['factorisations']} "
+                      f"({s['single_factorisations']} single), "
                       f"FGMRES {s['linear_iterations']}, cut-backs {s['cutbacks']}",
                       flush=True)
         if len(histories) == 2:
-            a, b = histories["pardiso"], histories["krylov"]
+            a, b = histories.values()
             print("  agreement", {c: float(np.abs(a[c] - b[c]).max()
                                            / max(np.abs(a[c]).max(), 1e-30))
                                   for c in ("p", "q", "settlement")}, flush=True)
@@ -499,6 +519,86 @@ def memory(nodes):
     _memory("after the step")
 
 
+@contextmanager
+def _precision(single):
+    """PARDISO inside the block, factorising the tangent of every discretisation that
+    suits an iterative solver (:attr:`soil.linear.Layout.iterative`) in single precision
+    (whether its :attr:`soil.linear.Layout.single` asks for it or not), or every tangent
+    in double."""
+    import soil.linear
+
+    def wrap(original):
+        def factorised(K, layout=None, symmetric=False):
+            if layout is not None:
+                layout = dataclasses.replace(layout, single=single and layout.iterative)
+            return original(K, layout, symmetric)
+        return factorised
+
+    kept, soil.linear.SINGLE = soil.linear.SINGLE, True
+    try:
+        with _factorising(wrap), linear_solver("pardiso"):
+            yield
+    finally:
+        soil.linear.SINGLE = kept
+
+
+def _single_step(method, nodes, single):
+    """One bench step (:func:`stabilised`) of ``method`` on PARDISO, in single precision
+    or double."""
+    import comparisons.bench
+
+    comparisons.bench.compression = stabilised
+    with _precision(single):
+        return one_step(method, nodes, "cam-clay", "pardiso")
+
+
+def single(sizes):
+    """PARDISO's factorisation of the bench step's first tangent (Nitsche, stabilised) in
+    double and in single precision, the refinement of one solve, one whole step of each,
+    and whole runs of :data:`RUNS` with each."""
+    import scipy.sparse as sp
+
+    from soil.linear import REFINED, _Pardiso
+
+    for nodes in sizes:
+        K, layout = first_tangent(nodes, krylov=True)
+        K = sp.csr_matrix(K)
+        b = np.random.default_rng(0).standard_normal(K.shape[0]) * layout.scales
+        print(f"{nodes} nodes, {K.shape[0]} unknowns", flush=True)
+        for scales in (None, layout.scales):
+            tic = time.perf_counter()
+            lu = _Pardiso(K, layout.groups, scales=scales)
+            built = time.perf_counter() - tic
+            name = "single" if lu.single else "double"
+            tic = time.perf_counter()
+            x, r, history = np.zeros_like(b), b, []
+            while not history or history[-1] > REFINED:
+                x += lu._phase(33, r.astype(np.float32 if lu.single else float))
+                r = b - K @ x
+                history.append(np.linalg.norm(r / layout.scales)
+                               / np.linalg.norm(b / layout.scales))
+                if len(history) == 6:
+                    break
+            print(f"  {name}: analysis and factorisation {built:.1f} s, "
+                  f"{lu.flops:.2e} flops, {lu.perturbed_pivots} perturbed pivots, factor "
+                  f"{lu.solver.get_iparm(17) / 1e3:.0f} MB (iparm 17); back-solves "
+                  f"{(time.perf_counter() - tic) / len(history):.2f} s each, scaled "
+                  f"residual after each", " ".join(f"{h:.1e}" for h in history), flush=True)
+            del lu
+        for method in ("efg", "fem-th", "fem-p1p1-stab"):
+            for precision in (False, True):
+                row, status = in_child(_single_step, method, nodes, precision,
+                                       timeout=LIMIT)
+                keys = ("step", "solve", "iterations", "factorisations",
+                        "single_factorisations", "peak_mb")
+                print(f"  {method} step, {'single' if precision else 'double'}: {status}",
+                      {k: round(float(row[k]), 2) for k in keys} if status == "ok" else row,
+                      flush=True)
+    runs({"double": partial(_precision, False), "single": partial(_precision, True)},
+         RUNS + (("unconfined-compression", "efg", "nitsche", "perturbation"),
+                 ("terzaghi", "efg", "nitsche", "perturbation")))
+
+
 def scaled_tangent(K, precondition, count):
     """The tangent ``K`` on the first ``count`` unknowns of the order of the Krylov
     ``precondition``, rows scaled as it scales them."""
@@ -629,6 +729,8 @@ if __name__ == "__main__":
         faults([int(float(n)) for n in sys.argv[2:]] or [100_000])
     elif sys.argv[1:2] == ["--spectral"]:
         spectral([int(float(n)) for n in sys.argv[2:]] or [100_000])
+    elif sys.argv[1:2] == ["--single"]:
+        single([int(float(n)) for n in sys.argv[2:]] or [30_000, 100_000])
     elif sys.argv[1:2] == ["--symmetric"]:
         symmetric([int(float(n)) for n in sys.argv[2:]] or [10_000, 100_000])
     else:

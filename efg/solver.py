@@ -525,6 +525,7 @@ def _layout(nodes, mass, scales, rigid, settings):
     Nitsche's conditions (a penalty's diagonal spans 1e6: a small residual says nothing
     of the error) and a pressure stabilisation (``settings``, the case's EFG settings)."""
     n = len(nodes)
+    iterative = settings.essential == "nitsche" and settings.stabilisation != "none"
     plate, pin = [scales.force] * int(rigid), [scales.volume] * int(scales.pin_pressure)
     extra = len(plate) + len(pin)
     return Layout(groups=np.concatenate([np.tile(np.arange(n), 3), np.full(extra, -1)]),
@@ -534,8 +535,7 @@ def _layout(nodes, mass, scales, rigid, settings):
                                          np.full(n, scales.volume), plate, pin]),
                   mass=partial(mass, extra=extra),
                   modulus=scales.modulus, smoother="schwarz", strength=STRENGTH,
-                  iterative=(settings.essential == "nitsche"
-                             and settings.stabilisation != "none"))
+                  iterative=iterative, single=iterative)
 
 
 def _roundoff(disc, points, du, du_bar, p, plate, alpha_u, alpha_p, rigid_w):

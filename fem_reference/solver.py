@@ -535,7 +535,8 @@ def _layout(T, n_u, u_locations, mass, scales, pair):
                   locations=np.concatenate([locations[first], np.zeros((pin, 2))]),
                   scales=np.append(scale, [scales.volume] * pin),
                   mass=sp.diags(np.append(np.where(reduced == 2, T.T @ mass, 0.0), [0.0] * pin)),
-                  modulus=scales.modulus, smoother=pair.smoother, iterative=pair.iterative)
+                  modulus=scales.modulus, smoother=pair.smoother, iterative=pair.iterative,
+                  single=pair.single)
 
 
 def _residual(model, disc, current, x, stress, J, Finv, dt):

@@ -33,7 +33,11 @@ class Pair:
     continuity equation (see :mod:`fem_reference.solver`). ``smoother`` is the Krylov
     back-end's AMG smoother for the pair and ``iterative`` whether that back-end suits
     it (inf-sup stable or stabilised), so that it is the default on large systems
-    (:class:`soil.linear.Layout`).
+    (:class:`soil.linear.Layout`). ``single``: PARDISO factorises its tangents in single
+    precision (:attr:`soil.linear.Layout.single`), where measured to pay: fem-th (one
+    bench step at 3 x 10^4 nodes, solve 7.8 s against 9.7 s); not fem-p1p1-stab (1.9 s
+    against 1.8 s, and 65 of the 199 factorisations of its unconfined compression were
+    redone in double; ``python docs/krylov_study.py --single``); fem-q2q1 not measured.
     """
 
     shape: str
@@ -43,12 +47,13 @@ class Pair:
     stabilised: bool = False
     smoother: str = "gauss_seidel"
     iterative: bool = False
+    single: bool = False
 
 
 #: The FEM methods of ``soilwater run --method``.
 PAIRS = {
     "fem-th": Pair("triangle", ElementTriP2, ElementTriP1, 4, smoother="schwarz",
-                   iterative=True),
+                   iterative=True, single=True),
     "fem-p1p1": Pair("triangle", ElementTriP1, ElementTriP1, 2),
     "fem-p1p1-stab": Pair("triangle", ElementTriP1, ElementTriP1, 2, stabilised=True,
                           iterative=True),

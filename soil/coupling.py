@@ -167,8 +167,8 @@ def run(case, method, options, current, step, row, snapshot, summary, progress=T
         Its summary holds ``steps``, ``tolerance``, ``linear_solver`` (the back-end of
         the last factorisation, :func:`soil.linear.backend`'s without one), ``summary``, the
         statistics of :func:`march`, the counts of :func:`newton`
-        (``factorisations``, ``symmetric_factorisations``, ``perturbed_pivots``,
-        ``factor_flops``, ``linear_iterations``) and ``timings``.
+        (``factorisations``, ``symmetric_factorisations``, ``single_factorisations``,
+        ``perturbed_pivots``, ``factor_flops``, ``linear_iterations``) and ``timings``.
     """
     stats = {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
     tic = time.perf_counter()
@@ -182,7 +182,8 @@ def run(case, method, options, current, step, row, snapshot, summary, progress=T
 
 def new_counts():
     """The factorisation counts :func:`newton` adds to, at zero."""
-    return {"factorisations": 0, "symmetric_factorisations": 0, "perturbed_pivots": 0,
+    return {"factorisations": 0, "symmetric_factorisations": 0, "single_factorisations": 0,
+            "perturbed_pivots": 0,
             "factor_flops": 0.0, "linear_iterations": 0}
 
 
@@ -223,7 +224,8 @@ def newton(system, stats):
         * ``advance(dx)``: add a correction to the unknowns.
     stats : dict
         Added to: ``factorisations`` (all of them), ``symmetric_factorisations`` (those of
-        ``sym(K)``), ``perturbed_pivots`` (summed over the factorisations; PARDISO's
+        ``sym(K)``), ``single_factorisations`` (those in single precision, PARDISO),
+        ``perturbed_pivots`` (summed over the factorisations; PARDISO's
         ``iparm(14)``), ``factor_flops`` (PARDISO's ``iparm(19)``, summed),
         ``linear_iterations`` (Krylov iterations) and ``timings`` (``assembly_s``,
         ``solve_s``); ``linear_solver`` set to the back-end of the last factorisation
@@ -285,10 +287,12 @@ def newton(system, stats):
                 _count(stats, lu)
             del K                           # the solver holds what it needs
         eta = forcing(residual, previous, eta, TOLERANCE)
-        previous, before = residual, lu.iterations
+        previous, before = residual, (lu.iterations, lu.factorisations, lu.flops)
         with timed(stats["timings"], "solve_s"):
             dx = lu.solve(-R, rtol=eta)
-        stats["linear_iterations"] += lu.iterations - before
+        stats["linear_iterations"] += lu.iterations - before[0]
+        stats["factorisations"] += lu.factorisations - before[1]    # redone in double
+        stats["factor_flops"] += lu.flops - before[2]
         system.advance(dx)
 
 
@@ -316,8 +320,9 @@ def _count(stats, lu):
     """Add the factorisation ``lu`` to the counts of :func:`newton`, and name its
     back-end (``linear_solver``, :func:`soil.linear.identity`)."""
     stats["linear_solver"] = identity(lu.backend)
-    stats["factorisations"] += 1
+    stats["factorisations"] += lu.factorisations
     stats["symmetric_factorisations"] += lu.symmetric
+    stats["single_factorisations"] += lu.single
     stats["perturbed_pivots"] += lu.perturbed_pivots
     stats["factor_flops"] += lu.flops
 

@@ -112,8 +112,9 @@ class Krylov:
         FGMRES iterations of all solves so far.
     backend : str
         ``"krylov"`` (:func:`soil.linear.backend`).
-    symmetric, perturbed_pivots, flops
-        False, 0 and 0.0: the counts :func:`soil.coupling.newton` keeps of a factorisation.
+    factorisations, symmetric, single, perturbed_pivots, flops
+        1, False, False, 0 and 0.0: the counts :func:`soil.coupling.newton` keeps of a
+        factorisation (one preconditioner build).
     current : bool
         True: solves are as cheap with the current tangent as with the first, so Newton
         hands it over at every iteration (:meth:`adopt`) and converges as Newton, not
@@ -121,6 +122,7 @@ class Krylov:
     """
 
     backend, symmetric, perturbed_pivots, flops, current = "krylov", False, 0, 0.0, True
+    factorisations, single = 1, False
 
     def __init__(self, K, layout):
         if layout is None or not layout.complete:

@@ -23,6 +23,12 @@ direct ones reuse a factorisation while it contracts the Newton residual at leas
 tangent otherwise; the Krylov one solves with the current tangent at every iteration
 through the preconditioner of the step's first (Newton).
 
+PARDISO factorises the tangent of a discretisation that asks for it (:attr:`Layout.single`)
+in single precision (:data:`SINGLE`): half the factor's memory and about half its time. Each solve refines
+in double precision against the tangent to a round-off residual (:data:`REFINED`), and
+the factor is redone in double precision if a refinement does not contract the residual
+:data:`CONTRACTION`-fold.
+
 ``factorise(K, layout, symmetric=True)`` asks for the cheaper symmetric factorisation of
 ``sym(K) = (K + K^T) / 2``, for a tangent that is nearly symmetric: PARDISO factorises
 its upper triangle as symmetric indefinite (``mtype = -2``, LDL^T with Bunch-Kaufman 1x1
@@ -60,6 +66,19 @@ FORCING_MAX = 1e-4
 #: PARDISO factor would need about 20 GB and its step is no faster than Krylov's from
 #: 10^5 nodes on (``make bench``, which runs both there).
 KRYLOV_FROM = 900_000
+#: PARDISO factorises the tangent of a discretisation that asks for it
+#: (:attr:`Layout.single`) in single precision and refines its solves in double
+#: (:class:`_Pardiso`). On the first tangent of the bench step (Nitsche EFG, 10^5 nodes)
+#: the single factorisation took 17.0 s against 28.4 s, and each refinement divides the
+#: scaled residual by about 3000 (``python docs/krylov_study.py --single``).
+SINGLE = True
+#: The relative residual (scaled rows) a single-precision solve is refined to, whatever
+#: the caller's ``rtol``: round-off, so that modified Newton takes the path of a double
+#: factor. Refined only to a tenth of the Newton tolerance, fem-th's unconfined
+#: compression (past its peak, where the path is chaotic) took 544 Newton iterations and
+#: 4 cut-backs against 590 and 5, q 4e-3 of its range away; refined to 1e-12, the same
+#: 590 and 5 and q within 4e-12, as SuperLU and PARDISO in double agree (8e-12).
+REFINED = 1e-12
 #: PARDISO ``iparm`` (MKL's 1-based numbering) of the node-blocked factorisation: own
 #: settings (1), METIS ordering (2), the user's permutation (5), one step of iterative
 #: refinement (8), pivots perturbed by 1e-13 (10), no scaling (11) and no weighted
@@ -77,6 +96,13 @@ SYMMETRIC_NODE_BLOCKED = {**NODE_BLOCKED, 21: 1}
 #: pivots (21); refinement when pivots were perturbed (8 = 0). MKL recommends them for
 #: saddle-point problems; its defaults for ``mtype = -2`` (no matching) fail there.
 SYMMETRIC = {1: 1, 2: 2, 10: 8, 11: 1, 13: 1, 21: 1}
+#: MKL's defaults for an unsymmetric matrix (``mtype = 11``) as own settings (1): METIS
+#: (2), pivots perturbed by 1e-13 (10), scaling (11) and weighted matching (13).
+UNSYMMETRIC = {1: 1, 2: 2, 10: 13, 11: 1, 13: 1}
+#: ``iparm`` added for a single-precision factorisation (28): PARDISO refines by itself
+#: (in single precision) only where it perturbed pivots (8 = 0); :class:`_Pardiso`
+#: refines in double.
+SINGLE_PRECISION = {8: 0, 28: 1}
 #: PARDISO ``iparm`` of the ordering-only analysis of the node graph: own settings (1),
 #: METIS (2), the permutation returned in ``perm`` (5 = 2), no weighted matching (13).
 NODE_ORDERING = {1: 1, 2: 2, 5: 2, 13: 0}
@@ -122,6 +148,12 @@ class Layout:
         pressure stabilisation; the inf-sup stable or stabilised FEM pairs), which
         :func:`backend` then picks by default from :data:`KRYLOV_FROM` unknowns. False:
         a direct solver at every size, unless ``SOILWATER_LINEAR_SOLVER`` says otherwise.
+    single : bool
+        PARDISO factorises the tangent in single precision and refines each solve in
+        double (:data:`SINGLE`, :class:`_Pardiso`): the discretisation's choice, where
+        measured to pay (``python docs/krylov_study.py --single``; EFG with Nitsche's
+        conditions and a stabilisation, fem-th). A penalty's tangent, whose diagonal spans
+        10^6, is beyond a single factor's refinement.
     """
 
     groups: np.ndarray = None
@@ -133,6 +165,7 @@ class Layout:
     smoother: str = "gauss_seidel"
     strength: float = 0.0
     iterative: bool = False
+    single: bool = False
 
     def __post_init__(self):
         """Reject an unknown :attr:`smoother` or a :attr:`strength` outside [0, 1)."""
@@ -305,6 +338,8 @@ def factorise(K, layout=None, symmetric=False):
         SuperLU, which does not perturb); ``flops``: floating-point operations of the
         factorisation as PARDISO reports them (``iparm(19)``; 0 for the others);
         ``iterations``: Krylov iterations of its solves (0 for the direct ones);
+        ``factorisations``: 1, or 2 once a single-precision PARDISO factor was redone
+        in double (``flops`` then counts both; ``single``: whether it is still single);
         ``backend``: the back-end's name (:func:`backend`); ``current``: whether Newton
         should hand it each new tangent (``adopt(K)``,
         False when it cannot solve with ``K`` and ``K`` must be factorised anew: the
@@ -328,15 +363,17 @@ def factorise(K, layout=None, symmetric=False):
     if name == "krylov":
         return Krylov(K, layout)
     if name == "pardiso":
-        return _Pardiso(K, groups, symmetric)
+        single = SINGLE and not symmetric and layout is not None and layout.single
+        return _Pardiso(K, groups, symmetric, layout.scales if single else None)
     return _SuperLU(K)
 
 
 class _Factor:
-    """What the direct factorisations share: no Krylov iterations, and a factorisation
+    """What the direct factorisations share: no Krylov iterations, one factorisation
+    (PARDISO's single precision may add a second, :class:`_Pardiso`), and a factorisation
     solves only with the tangent it factorised (``current`` False; :meth:`adopt`)."""
 
-    iterations, current = 0, False
+    iterations, factorisations, single, current = 0, 1, False, False
 
     def adopt(self, K):
         """False: a new tangent needs a new factorisation."""
@@ -363,51 +400,100 @@ class _SuperLU(_Factor):
 
 class _Pardiso(_Factor):
     """A PARDISO factorisation of one matrix (of ``K``, or of ``sym(K)`` when
-    ``symmetric``); its MKL memory is freed with the object."""
+    ``symmetric``); its MKL memory is freed with the object.
+
+    With ``scales`` (the residual scale of each row), ``K`` is factorised in single
+    precision (``iparm(28) = 1``, :data:`SINGLE_PRECISION`) and each solve is refined
+    in double against ``K``, its residual measured with rows divided by ``scales``. A
+    refinement that does not divide that residual :data:`CONTRACTION`-fold means the
+    single factor is too coarse for ``K``: ``K`` is factorised again in double precision
+    (``single`` becomes False; ``flops`` adds the second factorisation's)."""
 
     backend = "pardiso"
 
-    def __init__(self, K, groups=None, symmetric=False):
-        import pypardiso
-
-        self.symmetric = symmetric
+    def __init__(self, K, groups=None, symmetric=False, scales=None):
+        self.symmetric, self.scales, self.flops = symmetric, scales, 0.0
         self.A = _upper_symmetric(K) if symmetric else sp.csr_matrix(K, dtype=float)
         self.A.sort_indices()
-        self.solver = _solver(mtype=-2 if symmetric else 11)
-        for index, value in _settings(groups is not None, symmetric).items():
-            self.solver.set_iparm(index, value)
-        self.solver.set_iparm(19, -1)            # report the factorisation's Mflops
-        if groups is not None:
-            self.solver.perm = _grouped_order(self.A, np.asarray(groups, np.int64)) + 1
         if not np.diff(self.A.indptr).all():
             raise ConvergenceError("the tangent is singular (it has an empty row)")
-        try:
-            self._phase(12, np.zeros(self.A.shape[0]))
-        except pypardiso.pardiso_wrapper.PyPardisoError as err:
-            raise ConvergenceError(f"the tangent is singular ({err})") from None
-        self.perturbed_pivots = int(self.solver.get_iparm(14))
-        self.flops = 1e6 * float(self.solver.get_iparm(19))
+        self.grouped, self.solver = groups is not None, _solver(mtype=-2 if symmetric else 11)
+        if groups is not None:
+            self.solver.perm = _grouped_order(self.A, np.asarray(groups, np.int64)) + 1
         # phase -1: all of MKL's memory for this solver; the default (phase 0) frees
         # only the factor and leaks the analysis of every factorisation (14 MB a step
         # on a 21 x 21 footing, 14 GB over a 41 x 41 run)
         weakref.finalize(self, self.solver.free_memory, everything=True)
+        self._factorise(single=scales is not None)
+
+    @property
+    def single(self):
+        """True while the kept factor is in single precision."""
+        return self.A32 is not None
 
     def solve(self, b, rtol=None):
-        return self._phase(33, np.asarray(b, dtype=float))
+        """The solution of ``K x = b``; a single-precision factor refines it in double to
+        the scaled relative residual :data:`REFINED` (``rtol`` is ignored)."""
+        b = np.asarray(b, dtype=float)
+        if self.single:
+            x = self._refined(b)
+            if x is not None:
+                return x
+            self.solver.free_memory(everything=True)
+            self._factorise(single=False)
+            self.factorisations += 1
+        return self._phase(33, b)
+
+    def _refined(self, b):
+        """Iterative refinement of the single factor's solution in double to
+        :data:`REFINED`; None when a refinement contracts the scaled residual less than
+        :data:`CONTRACTION`-fold."""
+        x, r = np.zeros_like(b), b
+        size = previous = np.linalg.norm(b / self.scales)
+        while True:
+            x += self._phase(33, r.astype(np.float32))
+            r = b - self.A @ x
+            residual = np.linalg.norm(r / self.scales)
+            if residual <= REFINED * size:
+                return x
+            if not residual <= CONTRACTION * previous:      # NaN too
+                return None
+            previous = residual
+
+    def _factorise(self, single):
+        """PARDISO's analysis and factorisation (phase 12) of :attr:`A`, in single
+        precision (of a float32 copy, :attr:`A32`) or double."""
+        import pypardiso
+
+        self.A32 = sp.csr_matrix(self.A, dtype=np.float32) if single else None
+        self.solver.iparm[:] = 0
+        for index, value in _settings(self.grouped, self.symmetric, single).items():
+            self.solver.set_iparm(index, value)
+        self.solver.set_iparm(19, -1)            # report the factorisation's Mflops
+        try:
+            self._phase(12, np.zeros(self.A.shape[0], np.float32 if single else float))
+        except pypardiso.pardiso_wrapper.PyPardisoError as err:
+            raise ConvergenceError(f"the tangent is singular ({err})") from None
+        self.perturbed_pivots = int(self.solver.get_iparm(14))
+        self.flops += 1e6 * float(self.solver.get_iparm(19))
 
     def _phase(self, phase, b):
-        """PARDISO phase 12 (analysis, factorisation) or 33 (solve). ``PyPardisoSolver``'s
-        own ``factorize`` and ``solve`` keep a copy of the matrix and compare it on every
-        solve, at a cost that grows with the matrix; this object owns its matrix."""
+        """PARDISO phase 12 (analysis, factorisation) or 33 (solve), on :attr:`A32` while
+        the factor is single. ``PyPardisoSolver``'s own ``factorize`` and ``solve`` keep a
+        copy of the matrix and compare it on every solve, at a cost that grows with the
+        matrix; this object owns its matrix."""
         self.solver.set_phase(phase)
-        return self.solver._call_pardiso(self.A, b)
+        return self.solver._call_pardiso(self.A if self.A32 is None else self.A32, b)
 
 
-def _settings(grouped, symmetric):
+def _settings(grouped, symmetric, single=False):
     """PARDISO's ``iparm`` for a factorisation in the node-blocked order (``grouped``) or
-    not, of ``K`` or of ``sym(K)``; an empty dict leaves MKL's defaults."""
+    not, of ``K`` or of ``sym(K)``, in double or ``single`` precision; an empty dict
+    leaves MKL's defaults."""
     if symmetric:
         return SYMMETRIC_NODE_BLOCKED if grouped else SYMMETRIC
+    if single:
+        return {**(NODE_BLOCKED if grouped else UNSYMMETRIC), **SINGLE_PRECISION}
     return NODE_BLOCKED if grouped else {}
 
 

@@ -9,6 +9,7 @@ import scipy.sparse as sp
 import efg.solver
 import fem_reference.solver
 import soil.coupling
+import soil.linear
 from soil.coupling import TIMERS, new_counts, newton
 from soil.errors import ConvergenceError, InputError
 from soil.linear import Layout, backend, factorise
@@ -197,4 +198,74 @@ def test_pardiso_and_superlu_give_the_same_steps(monkeypatch, symmetric_first):
         assert symmetric == 0
     for column in ("p", "q", "eps_a"):
         assert np.allclose(runs["pardiso"][column], runs["superlu"][column],
+                           rtol=1e-7, atol=1e-9)
+
+
+def ill_conditioned(n=60, condition=1e11, seed=0):
+    """A dense-pattern sparse matrix with singular values from 1 down to 1/``condition``:
+    beyond what a single-precision factor can refine."""
+    rng = np.random.default_rng(seed)
+    Q, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    P, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    return sp.csr_matrix(Q @ np.diag(np.logspace(0, -np.log10(condition), n)) @ P.T)
+
+
+@pytest.mark.skipif(not PARDISO, reason="pypardiso is not installed (soilwater[fast])")
+@pytest.mark.parametrize("node_blocked", [False, True])
+def test_single_precision_factor_refines_to_the_residual_asked_for(monkeypatch,
+                                                                   node_blocked):
+    """A well-conditioned tangent whose layout asks for it is factorised in single
+    precision; each solve is refined in double to a round-off scaled residual, whatever
+    the relative residual asked for (modified Newton needs a double factor's solves)."""
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "pardiso")
+    K, groups, b = saddle()
+    scales = np.concatenate([np.full(2 * 40, 10.0), np.full(40, 0.1)])
+    lu = factorise(K, Layout(groups=groups if node_blocked else None, scales=scales,
+                             single=True))
+    for rtol in (1e-3, None):
+        x = lu.solve(b, rtol=rtol)
+        assert lu.single
+        assert (np.linalg.norm((K @ x - b) / scales)
+                <= soil.linear.REFINED * np.linalg.norm(b / scales))
+    assert lu.factorisations == 1
+    assert not factorise(K, Layout(groups=groups, scales=scales)).single   # a penalty's
+
+
+@pytest.mark.skipif(not PARDISO, reason="pypardiso is not installed (soilwater[fast])")
+def test_single_precision_factor_too_coarse_is_redone_in_double(monkeypatch):
+    """Where refinement does not contract tenfold, the factor is redone in double: the
+    solve is then a double factor's, and both factorisations are counted."""
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "pardiso")
+    K = ill_conditioned()
+    x_true = np.random.default_rng(1).standard_normal(K.shape[0])
+    b = K @ x_true
+    lu = factorise(K, Layout(scales=np.ones(K.shape[0]), single=True))
+    assert lu.single
+    x = lu.solve(b)
+    assert not lu.single and lu.factorisations == 2
+    assert np.linalg.norm(K @ x - b) <= 1e-9 * np.linalg.norm(b)
+
+
+@pytest.mark.skipif(not PARDISO, reason="pypardiso is not installed (soilwater[fast])")
+@pytest.mark.parametrize("method", ["efg", "fem-th"])
+def test_single_precision_takes_the_steps_of_double(monkeypatch, method):
+    """Solves refined to round-off on a single-precision factor (Nitsche EFG stabilised,
+    fem-th: their layouts ask for it) take the Newton iterations and factorisations of a
+    double factor, and its path."""
+    monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "pardiso")
+    case = load_case("unconfined-compression", ["time.steps=4", "time.end=2.0",
+                                                'efg.essential="nitsche"',
+                                                'efg.stabilisation="perturbation"'])
+    runs = {}
+    for single in (False, True):
+        monkeypatch.setattr(soil.linear, "SINGLE", single)
+        result = (efg.solver.solve(case, progress=False) if method == "efg"
+                  else fem_reference.solver.solve(case, method, progress=False))
+        runs[single] = result
+    assert runs[True].summary["single_factorisations"] > 0
+    assert runs[False].summary["single_factorisations"] == 0
+    for key in ("newton_iterations", "factorisations"):
+        assert runs[True].summary[key] == runs[False].summary[key]
+    for column in ("p", "q", "eps_a"):
+        assert np.allclose(runs[True].history[column], runs[False].history[column],
                            rtol=1e-7, atol=1e-9)
