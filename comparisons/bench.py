@@ -12,7 +12,7 @@ Three measurements, all on this machine in one command (never timed tests):
    step of 0.2 % axial strain) at about 10^3, 3 x 10^3, ..., 10^6 nodes (:data:`SIZES`)
    for ``efg``, ``fem-p1p1``, ``fem-th`` and ``fem-p1p1-stab`` on the same vertices, with
    the Cam-clay skeleton of the case and with a linear elastic one. The rule that bounds
-   the whole run (26 minutes on 2 cores, the four large runs at most 4 x 900 s of it):
+   the whole run (33 minutes on 2 cores, the four large runs at most 4 x 900 s of it):
    from 3 x 10^5 nodes (:data:`LARGE_FROM`) only ``efg`` and ``fem-p1p1-stab`` with
    Cam-clay run, and a run is stopped after 900 s there, 240 s below
    (:func:`time_limit`). The linear solver is chosen by size (:func:`solver_for`): the direct
@@ -21,7 +21,10 @@ Three measurements, all on this machine in one command (never timed tests):
    EFG runs with Nitsche's conditions and the perturbation stabilisation, as the Krylov
    back-end needs (:func:`compression`; the ``efg`` column says which). From 10^4 nodes
    (:data:`BOTH_FROM`) EFG and ``fem-p1p1-stab`` also run on Krylov below 3 x 10^5,
-   with either skeleton, so issue 17's targets take each on its faster solver, measured. The
+   with either skeleton, so issue 17's targets take each on its faster solver, measured,
+   and on PARDISO EFG runs a second time with Nitsche's conditions and the perturbation:
+   PARDISO factorises such a tangent (and fem-th's and fem-p1p1-stab's) in single
+   precision (``soil.linear.SINGLE``; the ``single_factorisations`` column). The
    solvers' own phase timers (:data:`soil.coupling.TIMERS`) give shape functions (FEM:
    basis construction), background cells (FEM: moving the mesh), assembly of the
    tangent, linear solve (analysis, factorisations and back-substitutions), constitutive
@@ -199,16 +202,19 @@ def usable(solver):
 
 
 def plan(sizes=SIZES, methods=METHODS, materials=MATERIALS):
-    """The runs of :func:`steps`: ``(nodes, material, method, solver, limit)`` per run,
-    sizes in the given order; from :data:`LARGE_FROM` nodes only :data:`LARGE_METHODS`
-    with :data:`LARGE_MATERIALS`; from :data:`BOTH_FROM` to :data:`KRYLOV_FROM`
-    :data:`LARGE_METHODS` run on the direct back-end and then on ``"krylov"``.
+    """The runs of :func:`steps`: ``(nodes, material, method, solver, limit, ready)`` per
+    run, sizes in the given order; from :data:`LARGE_FROM` nodes only
+    :data:`LARGE_METHODS` with :data:`LARGE_MATERIALS`; from :data:`BOTH_FROM` to
+    :data:`KRYLOV_FROM` :data:`LARGE_METHODS` run on the direct back-end and then on
+    ``"krylov"``, and on PARDISO EFG runs a second time as the Krylov back-end needs it
+    (``ready``, :func:`compression`'s ``krylov``), where PARDISO factorises it in single
+    precision (:data:`soil.linear.SINGLE`). ``ready`` is True for every Krylov run.
 
     Examples
     --------
     >>> [run[:4] for run in plan([1_000_000], ("efg", "fem-th"))]
     [(1000000, 'cam-clay', 'efg', 'krylov')]
-    >>> [run[3] for run in plan([BOTH_FROM], ("efg",), ("elastic",))][1:]
+    >>> [run[3] for run in plan([BOTH_FROM], ("efg",), ("elastic",))][-1:]
     ['krylov']
     """
     runs = []
@@ -218,23 +224,28 @@ def plan(sizes=SIZES, methods=METHODS, materials=MATERIALS):
                 if nodes >= LARGE_FROM and not (method in LARGE_METHODS
                                                 and material in LARGE_MATERIALS):
                     continue
-                solvers = [solver_for(nodes)]
+                solvers = [(solver_for(nodes), solver_for(nodes) == "krylov")]
                 if method in LARGE_METHODS and BOTH_FROM <= nodes < KRYLOV_FROM:
-                    solvers.append("krylov")
-                runs += [(nodes, material, method, solver, time_limit(nodes))
-                         for solver in solvers]
+                    if method == "efg" and direct() == "pardiso":
+                        solvers.append(("pardiso", True))
+                    solvers.append(("krylov", True))
+                runs += [(nodes, material, method, solver, time_limit(nodes), ready)
+                         for solver, ready in solvers]
     return runs
 
 
 #: Columns of a row of :func:`steps`, in order.
 COLUMNS = ("method", "material", "nodes", "solver", "efg", "status", "dofs",
            "iterations", "linear_iterations", "factorisations", "symmetric_factorisations",
+           "single_factorisations",
            "perturbed_pivots", "factor_flops", *PHASES, "factor_gflops_lb", "peak_mb",
            "kb_per_node", "wall_s", "limit_s")
 
 
-def one_step(method, nodes, material, solver=None):
-    """Run one step under the linear back-end ``solver`` (None: :func:`backend`'s).
+def one_step(method, nodes, material, solver=None, ready=None):
+    """Run one step under the linear back-end ``solver`` (None: :func:`backend`'s), EFG
+    as the Krylov back-end needs it if ``ready`` (None: on ``"krylov"`` only;
+    :func:`compression`).
 
     Returns
     -------
@@ -252,7 +263,8 @@ def one_step(method, nodes, material, solver=None):
 
     with linear_solver(solver):
         name = backend() if solver is None else solver
-        case = compression(nodes, material, krylov=name == "krylov")
+        case = compression(nodes, material, krylov=name == "krylov" if ready is None
+                           else ready)
         tic = time.perf_counter()
         result = (efg.solver.solve(case, progress=False) if method == "efg"
                   else fem_reference.solver.solve(case, method, progress=False))
@@ -260,13 +272,13 @@ def one_step(method, nodes, material, solver=None):
     summary = result.summary
     row = {"method": method, "material": material, "nodes": len(case.nodes()),
            "solver": name,
-           "efg": (f"{case.efg.essential}, {case.efg.stabilisation}" if method == "efg"
-                   else "-"),
+           "efg": _conditions(case, method),
            "status": "ok", "dofs": summary["dofs"],
            "iterations": int(result.history.iterations.sum()),
            "linear_iterations": float(summary.get("linear_iterations", np.nan)),
            "factorisations": summary.get("factorisations", np.nan),
            "symmetric_factorisations": summary.get("symmetric_factorisations", np.nan),
+           "single_factorisations": summary.get("single_factorisations", np.nan),
            "perturbed_pivots": summary.get("perturbed_pivots", np.nan),
            "factor_flops": float(summary.get("factor_flops", np.nan)), "wall_s": wall}
     for phase, timer in PHASES.items():
@@ -274,6 +286,11 @@ def one_step(method, nodes, material, solver=None):
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024.0   # bytes (Linux)
     row["peak_mb"], row["kb_per_node"] = peak / 1e6, peak / 1e3 / row["nodes"]
     return row
+
+
+def _conditions(case, method):
+    """The ``efg`` column: EFG's essential conditions and stabilisation, "-" for FEM."""
+    return f"{case.efg.essential}, {case.efg.stabilisation}" if method == "efg" else "-"
 
 
 def in_child(fn, *args, timeout=None):
@@ -370,17 +387,18 @@ def steps(sizes=SIZES, methods=METHODS, materials=MATERIALS, limit=None, progres
     if any(run[3] == "krylov" for run in runs) and usable("krylov"):
         one_step(methods[0], 200, "cam-clay", "krylov")          # load pyamg
     rows = []
-    for nodes, material, method, solver, seconds in runs:
+    for nodes, material, method, solver, seconds, ready in runs:
         seconds = seconds if limit is None else limit
         if usable(solver):
-            row, status = in_child(one_step, method, nodes, material, solver,
+            row, status = in_child(one_step, method, nodes, material, solver, ready,
                                    timeout=seconds)
         else:
             row, status = None, f"{solver} not available"
         if status != "ok":
-            row = {"method": method, "material": material,
-                   "nodes": len(compression(nodes).nodes()), "solver": solver,
-                   "status": status, **(row or {})}
+            case = compression(nodes, krylov=ready)
+            row = {"method": method, "material": material, "nodes": len(case.nodes()),
+                   "solver": solver, "efg": _conditions(case, method), "status": status,
+                   **(row or {})}
             if row.get("peak_mb") is not None:
                 row["kb_per_node"] = row["peak_mb"] * 1e3 / row["nodes"]
                 status += f", peak {row['peak_mb']:.0f} MB"
@@ -602,18 +620,20 @@ def at(x, xs, ys):
 
 def ratios(table):
     """EFG / FEM per phase at equal nodes (same grid) on the same linear solver, for each
-    material, size and solver."""
+    material, size, solver and EFG's conditions (``efg``)."""
     rows = []
     for (material, nodes, solver), group in table.groupby(["material", "nodes", "solver"],
                                                           sort=False):
-        by = group.set_index("method")
-        for fem in METHODS[1:]:
-            if "efg" not in by.index or fem not in by.index:
-                continue
-            row = {"material": material, "nodes": nodes, "solver": solver, "against": fem}
-            for phase in PHASES:
-                row[phase] = by.loc["efg", phase] / by.loc[fem, phase]
-            rows.append(row)
+        by = group.drop_duplicates("method").set_index("method")
+        for _, efg in group[group.method == "efg"].iterrows():
+            for fem in METHODS[1:]:
+                if fem not in by.index:
+                    continue
+                row = {"material": material, "nodes": nodes, "solver": solver,
+                       "efg": efg["efg"], "against": fem}
+                for phase in PHASES:
+                    row[phase] = efg[phase] / by.loc[fem, phase]
+                rows.append(row)
     return pd.DataFrame(rows)
 
 
@@ -622,14 +642,14 @@ def exponents(table):
     the runs that completed (``from`` and ``to``: the node counts of the fit)."""
     rows = []
     ok = table[table.status == "ok"]
-    for (method, material, solver), group in ok.groupby(["method", "material", "solver"],
-                                                        sort=False):
-        row = {"method": method, "material": material, "solver": solver,
+    for (method, material, solver, efg), group in ok.groupby(
+            ["method", "material", "solver", "efg"], sort=False):
+        row = {"method": method, "material": material, "solver": solver, "efg": efg,
                "from": group.nodes.min(), "to": group.nodes.max()}
         for phase in PHASES:
             row[phase] = exponent(group.nodes, group[phase])
         rows.append(row)
-    return pd.DataFrame(rows, columns=["method", "material", "solver", "from", "to",
+    return pd.DataFrame(rows, columns=["method", "material", "solver", "efg", "from", "to",
                                        *PHASES])
 
 
@@ -656,7 +676,7 @@ def targets(table, shapes, growth):
             fem = at(row.dofs, th.dofs, th.assembly / th.factorisations) if len(th) else np.nan
             if fem == fem:
                 rows.append((f"assembly per tangent / fem-th at equal DOFs ({material})",
-                             f"{row.nodes} nodes, {int(row.dofs)} DOFs",
+                             f"{row.nodes} nodes, {int(row.dofs)} DOFs; {row.efg}",
                              row.assembly / row.factorisations / fem, 2.0))
         for nodes in (10_000, 100_000):
             f = pick(table, "fem-p1p1", material, nodes)
@@ -672,7 +692,7 @@ def targets(table, shapes, growth):
         for phase in PHASES:
             if phase != "solve":
                 rows.append((f"growth exponent, EFG {phase} ({row.material})",
-                             f"{row['from']} to {row['to']} nodes, {row.solver}",
+                             f"{row['from']} to {row['to']} nodes, {row.solver}; {row.efg}",
                              row[phase], 1.2))
     frame = pd.DataFrame(rows, columns=["target", "where", "measured", "limit"])
     frame["met"] = verdict(frame.measured, frame.limit)
@@ -714,7 +734,7 @@ def issue17_targets(table, machine_name="this machine"):
         for _, row in there.iterrows():
             done, peak = row.status == "ok", row.get("peak_mb", np.nan)
             until = f" (peak {peak / 1e3:.2f} GB until then)" if peak == peak else ""
-            rows.append((what, f"{row.nodes} nodes, {row.solver}"
+            rows.append((what, f"{row.nodes} nodes, {row.solver}; {row.efg}"
                          + ("" if done else f", {row.status}{until}") + note,
                          row[column] * scale if done else np.nan, limit))
 
@@ -729,7 +749,8 @@ def issue17_targets(table, machine_name="this machine"):
     faster = pd.DataFrame([fastest(group) for _, group in efg.groupby("nodes")],
                           columns=efg.columns)
     series = {"faster solver at each size": faster,
-              **dict(tuple(efg.groupby("solver", sort=False)))}
+              **{f"{solver}; {conditions}": runs for (solver, conditions), runs
+                 in efg.groupby(["solver", "efg"], sort=False)}}
     for name, runs in series.items():
         rows.append((f"EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes ({name})",
                      *_growth(runs), 1.15))
@@ -741,7 +762,7 @@ def issue17_targets(table, machine_name="this machine"):
         f = fastest(stab[(stab.material == material) & (stab.nodes == nodes)])
         if f is None:
             continue
-        where = f"{nodes} nodes, efg {e.solver}, fem-p1p1-stab {f.solver}"
+        where = f"{nodes} nodes, efg {e.solver} ({e.efg}), fem-p1p1-stab {f.solver}"
         if e.status == "ok" and f.status == "ok":
             ratio = e.step / f.step
         else:
@@ -790,11 +811,13 @@ def figure(table, path):
     colours = dict(zip(METHODS, ("C0", "C1", "C2", "C3"), strict=True))
     ok = table[table.status == "ok"]
     for ax, phase in zip(axes.ravel(), PHASES, strict=True):
-        for (method, material), group in ok.groupby(["method", "material"], sort=False):
+        for (method, material, efg), group in ok.groupby(["method", "material", "efg"],
+                                                         sort=False):
             if not group[phase].notna().any():
                 continue
-            colour, marker = colours[method], "o" if material == "cam-clay" else "s"
-            label = f"{method}, {material}"
+            colour = "C4" if efg.startswith("nitsche") else colours[method]
+            marker = "o" if material == "cam-clay" else "s"
+            label = f"{method}, {material}" + (f" ({efg})" if efg != "-" else "")
             for krylov, part in group.groupby(group.solver == "krylov"):
                 ax.loglog(part.nodes, part[phase], ("-" if material == "cam-clay" else "--")
                           + marker, color=colour, ms=4, mfc="none" if krylov else colour,
@@ -865,12 +888,14 @@ def rates(table, yardstick):
     Returns
     -------
     pandas.DataFrame
-        Method, material, nodes, solver, ``factor_flops``, ``solve`` [s],
-        ``factor_gflops_lb`` [GF/s] and its fractions of MKL's and NumPy's dgemm rates.
+        Method, material, nodes, solver, EFG's conditions, ``single_factorisations``,
+        ``factor_flops``, ``solve`` [s], ``factor_gflops_lb`` [GF/s] and its fractions of
+        MKL's and NumPy's dgemm rates (a single-precision factorisation's rate is
+        compared with double's dgemm too, so its fraction overstates).
     """
     done = table[table.factor_flops.notna() & (table.status == "ok")]
-    return done[["method", "material", "nodes", "solver", "factor_flops", "solve",
-                 "factor_gflops_lb"]].assign(
+    return done[["method", "material", "nodes", "solver", "efg", "single_factorisations",
+                 "factor_flops", "solve", "factor_gflops_lb"]].assign(
         of_mkl_dgemm=done.factor_gflops_lb / yardstick["mkl_gflops"],
         of_numpy_dgemm=done.factor_gflops_lb / yardstick["numpy_gflops"])
 
@@ -919,9 +944,12 @@ def run(path="reports/bench.md", sizes=SIZES):
         f"{' and '.join(LARGE_MATERIALS)}. The linear solver is chosen by size: "
         f"{direct()} below {KRYLOV_FROM} nodes, the iterative back-end (krylov) from "
         f"there; from {BOTH_FROM} nodes {' and '.join(LARGE_METHODS)} also run on "
-        f"krylov below {KRYLOV_FROM}, with either material. Each "
+        f"krylov below {KRYLOV_FROM}, with either material, and on {direct()} EFG runs "
+        "a second time as Krylov needs it. Each "
         "row names its solver, and the `efg` column EFG's essential conditions and "
-        "stabilisation (the Krylov back-end needs Nitsche's and the perturbation). A run "
+        "stabilisation (the Krylov back-end needs Nitsche's and the perturbation). "
+        "PARDISO factorises the tangents of such EFG, fem-th and fem-p1p1-stab in single "
+        "precision and refines in double (`single_factorisations`). A run "
         "is stopped after "
         f"{TIME_LIMIT:.0f} s ({LARGE_TIME_LIMIT:.0f} s from {LARGE_FROM} nodes). "
         "Times are the solvers' phase timers [s]; the step includes everything the "
@@ -942,21 +970,25 @@ def run(path="reports/bench.md", sizes=SIZES):
         "floating-point operations of all the run's factorisations (the back-end's count, "
         "`factor_flops`) divided by the solve time, which also holds the analysis "
         "(ordering) and the back-solves: a lower bound of the factorisation's rate "
-        "[GF/s = 10^9 flop/s].", "",
+        "[GF/s = 10^9 flop/s]. A run with `single_factorisations` factorised in single "
+        "precision, whose arithmetic runs at about twice dgemm's rate: its fractions "
+        "overstate.", "",
         to_markdown(measured, "{:.3g}") if len(measured) else
         "No run reported `factor_flops` (`result.summary` has no count from its linear "
         "back-end): the factorisation rate is not measured.\n",
         "## Targets (issue 7)", "", to_markdown(goals, "{:.3g}"),
         "## Phase times [s]", "",
-        to_markdown(table[["method", "material", "nodes", "solver", "status", *PHASES]],
-                    "{:.3g}"),
+        to_markdown(table[["method", "material", "nodes", "solver", "efg", "status",
+                           *PHASES]], "{:.3g}"),
         "## Counts, memory and rates", "",
         "Newton `iterations` summed over the step, `linear_iterations` the Krylov "
         "iterations (- where the back-end reports none), `factor_flops` as above, "
         "`limit_s` the run's time limit [s].", "",
-        to_markdown(table[["method", "material", "nodes", "solver", "dofs", "iterations",
+        to_markdown(table[["method", "material", "nodes", "solver", "efg", "dofs",
+                           "iterations",
                            "linear_iterations", "factorisations",
-                           "symmetric_factorisations", "perturbed_pivots", "factor_flops",
+                           "symmetric_factorisations", "single_factorisations",
+                           "perturbed_pivots", "factor_flops",
                            "factor_gflops_lb", "peak_mb", "kb_per_node", "limit_s"]],
                     "{:.3g}"),
         "## EFG / FEM at equal nodes", "", to_markdown(ratios(table), "{:.3g}"),

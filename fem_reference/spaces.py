@@ -34,10 +34,11 @@ class Pair:
     back-end's AMG smoother for the pair and ``iterative`` whether that back-end suits
     it (inf-sup stable or stabilised), so that it is the default on large systems
     (:class:`soil.linear.Layout`). ``single``: PARDISO factorises its tangents in single
-    precision (:attr:`soil.linear.Layout.single`), where measured to pay: fem-th (one
-    bench step at 3 x 10^4 nodes, solve 7.8 s against 9.7 s); not fem-p1p1-stab (1.9 s
-    against 1.8 s, and 65 of the 199 factorisations of its unconfined compression were
-    redone in double; ``python docs/krylov_study.py --single``); fem-q2q1 not measured.
+    precision (:attr:`soil.linear.Layout.single`), where measured to pay
+    (``python docs/krylov_study.py --single``): fem-th (one bench step's solve at 10^5
+    nodes 31.3 s against 44.8 s); not fem-p1p1-stab (6.6 s against 6.4 s, and 65 of the
+    199 factorisations of its unconfined compression were redone in double); fem-q2q1
+    not measured.
     """
 
     shape: str
