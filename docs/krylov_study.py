@@ -18,7 +18,7 @@ their times and flops, one back-solve of each, and FGMRES on ``K`` preconditione
 LDL^T (rows scaled as Newton scales them) to 1e-4, 1e-8 and 1e-10: iterations, time and
 the largest difference from the LU solution relative to its largest entry.
 
-``python docs/krylov_study.py --single [nodes ...]`` (default 3e4 1e5; about 15 minutes):
+``python docs/krylov_study.py --single [nodes ...]`` (default 3e4 1e5; about 20 minutes):
 PARDISO's factorisation of the first tangent of the bench step as the Krylov sizes run it
 (Nitsche, stabilised) in double and in single precision: time, flops, perturbed pivots,
 the factor's memory (``iparm(17)``) and the scaled residual after each refinement of one
@@ -554,11 +554,12 @@ def _single_step(method, nodes, single):
 
 def single(sizes):
     """PARDISO's factorisation of the bench step's first tangent (Nitsche, stabilised) in
-    double and in single precision, the refinement of one solve, one whole step of each,
-    and whole runs of :data:`RUNS` with each."""
+    double and in single precision and the refinement of one solve, one bench step of
+    three methods with each, and whole runs of :data:`RUNS` (and EFG's with the
+    perturbation) with each."""
     import scipy.sparse as sp
 
-    from soil.linear import REFINED, _Pardiso
+    from soil.linear import _Pardiso
 
     for nodes in sizes:
         K, layout = first_tangent(nodes, krylov=True)
@@ -570,18 +571,16 @@ def single(sizes):
             lu = _Pardiso(K, layout.groups, scales=scales)
             built = time.perf_counter() - tic
             name = "single" if lu.single else "double"
-            tic = time.perf_counter()
-            x, r, history = np.zeros_like(b), b, []
-            while not history or history[-1] > REFINED:
-                x += lu._phase(33, r.astype(np.float32 if lu.single else float))
-                r = b - K @ x
-                history.append(np.linalg.norm(r / layout.scales)
+            tic, history = time.perf_counter(), []
+            if lu.single:
+                lu._refined(b, history)
+            else:
+                history.append(np.linalg.norm((b - K @ lu.solve(b)) / layout.scales)
                                / np.linalg.norm(b / layout.scales))
-                if len(history) == 6:
-                    break
             print(f"  {name}: analysis and factorisation {built:.1f} s, "
                   f"{lu.flops:.2e} flops, {lu.perturbed_pivots} perturbed pivots, factor "
-                  f"{lu.solver.get_iparm(17) / 1e3:.0f} MB (iparm 17); back-solves "
+                  f"{lu.solver.get_iparm(17) / 1e3:.0f} MB (iparm 17); "
+                  f"{'refinements' if lu.single else 'back-solve'} "
                   f"{(time.perf_counter() - tic) / len(history):.2f} s each, scaled "
                   f"residual after each", " ".join(f"{h:.1e}" for h in history), flush=True)
             del lu

@@ -444,16 +444,19 @@ class _Pardiso(_Factor):
             self.factorisations += 1
         return self._phase(33, b)
 
-    def _refined(self, b):
+    def _refined(self, b, residuals=None):
         """Iterative refinement of the single factor's solution in double to
         :data:`REFINED`; None when a refinement contracts the scaled residual less than
-        :data:`CONTRACTION`-fold."""
+        :data:`CONTRACTION`-fold. Each solve's scaled relative residual is appended to the
+        list ``residuals`` if one is given."""
         x, r = np.zeros_like(b), b
         size = previous = np.linalg.norm(b / self.scales)
         while True:
             x += self._phase(33, r.astype(np.float32))
             r = b - self.A @ x
             residual = np.linalg.norm(r / self.scales)
+            if residuals is not None:
+                residuals.append(residual / size)
             if residual <= REFINED * size:
                 return x
             if not residual <= CONTRACTION * previous:      # NaN too
