@@ -232,14 +232,16 @@ def test_single_precision_factor_refines_to_the_residual_asked_for(monkeypatch,
 
 
 @pytest.mark.skipif(not PARDISO, reason="pypardiso is not installed (soilwater[fast])")
-def test_single_precision_factor_too_coarse_is_redone_in_double(monkeypatch):
+@pytest.mark.parametrize("node_blocked", [False, True])
+def test_single_precision_factor_too_coarse_is_redone_in_double(monkeypatch, node_blocked):
     """Where refinement does not contract tenfold, the factor is redone in double: the
     solve is then a double factor's, and both factorisations are counted."""
     monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "pardiso")
     K = ill_conditioned()
     x_true = np.random.default_rng(1).standard_normal(K.shape[0])
     b = K @ x_true
-    lu = factorise(K, Layout(scales=np.ones(K.shape[0]), single=True))
+    groups = np.arange(K.shape[0]) // 3 if node_blocked else None
+    lu = factorise(K, Layout(groups=groups, scales=np.ones(K.shape[0]), single=True))
     assert lu.single
     x = lu.solve(b)
     assert not lu.single and lu.factorisations == 2
