@@ -23,8 +23,8 @@ Three measurements, all on this machine in one command (never timed tests):
    (:data:`BOTH_FROM`) EFG and ``fem-p1p1-stab`` also run on Krylov below 3 x 10^5,
    with either skeleton, so issue 17's targets take each on its faster solver, measured,
    and on PARDISO EFG runs a second time with Nitsche's conditions and the perturbation:
-   PARDISO factorises such a tangent (and fem-th's and fem-p1p1-stab's) in single
-   precision (``soil.linear.SINGLE``; the ``single_factorisations`` column). The
+   PARDISO factorises such a tangent (and fem-th's) in single precision
+   (``soil.linear.Layout.single``; the ``single_factorisations`` column). The
    solvers' own phase timers (:data:`soil.coupling.TIMERS`) give shape functions (FEM:
    basis construction), background cells (FEM: moving the mesh), assembly of the
    tangent, linear solve (analysis, factorisations and back-substitutions), constitutive
@@ -208,7 +208,8 @@ def plan(sizes=SIZES, methods=METHODS, materials=MATERIALS):
     :data:`KRYLOV_FROM` :data:`LARGE_METHODS` run on the direct back-end and then on
     ``"krylov"``, and on PARDISO EFG runs a second time as the Krylov back-end needs it
     (``ready``, :func:`compression`'s ``krylov``), where PARDISO factorises it in single
-    precision (:data:`soil.linear.SINGLE`). ``ready`` is True for every Krylov run.
+    precision (:attr:`soil.linear.Layout.single`). ``ready`` is True for every Krylov
+    run.
 
     Examples
     --------
@@ -948,8 +949,8 @@ def run(path="reports/bench.md", sizes=SIZES):
         "a second time as Krylov needs it. Each "
         "row names its solver, and the `efg` column EFG's essential conditions and "
         "stabilisation (the Krylov back-end needs Nitsche's and the perturbation). "
-        "PARDISO factorises the tangents of such EFG, fem-th and fem-p1p1-stab in single "
-        "precision and refines in double (`single_factorisations`). A run "
+        "PARDISO factorises the tangents of such EFG and of fem-th in single precision "
+        "and refines in double (`single_factorisations`). A run "
         "is stopped after "
         f"{TIME_LIMIT:.0f} s ({LARGE_TIME_LIMIT:.0f} s from {LARGE_FROM} nodes). "
         "Times are the solvers' phase timers [s]; the step includes everything the "

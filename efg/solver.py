@@ -523,7 +523,9 @@ def _layout(nodes, mass, scales, rigid, settings):
     """The :class:`soil.linear.Layout` of the unknowns ``[ux, uy, p, plate?, pin?]``;
     ``mass(extra)`` gives the pressure mass matrix. The Krylov back-end suits EFG with
     Nitsche's conditions (a penalty's diagonal spans 1e6: a small residual says nothing
-    of the error) and a pressure stabilisation (``settings``, the case's EFG settings)."""
+    of the error) and a pressure stabilisation (``settings``, the case's EFG settings),
+    and PARDISO factorises such a tangent in single precision (``Layout.single``,
+    measured: ``python docs/krylov_study.py --single``)."""
     n = len(nodes)
     iterative = settings.essential == "nitsche" and settings.stabilisation != "none"
     plate, pin = [scales.force] * int(rigid), [scales.volume] * int(scales.pin_pressure)

@@ -23,11 +23,11 @@ direct ones reuse a factorisation while it contracts the Newton residual at leas
 tangent otherwise; the Krylov one solves with the current tangent at every iteration
 through the preconditioner of the step's first (Newton).
 
-PARDISO factorises the tangent of a discretisation that asks for it (:attr:`Layout.single`)
-in single precision (:data:`SINGLE`): half the factor's memory and about half its time. Each solve refines
-in double precision against the tangent to a round-off residual (:data:`REFINED`), and
-the factor is redone in double precision if a refinement does not contract the residual
-:data:`CONTRACTION`-fold.
+PARDISO factorises the tangent of a discretisation that asks for it
+(:attr:`Layout.single`) in single precision (:data:`SINGLE`): half the factor's memory and
+about half its time. Each solve refines in double precision against the tangent to a
+round-off residual (:data:`REFINED`), and the factor is redone in double precision if a
+refinement does not contract the residual :data:`CONTRACTION`-fold.
 
 ``factorise(K, layout, symmetric=True)`` asks for the cheaper symmetric factorisation of
 ``sym(K) = (K + K^T) / 2``, for a tangent that is nearly symmetric: PARDISO factorises
@@ -69,7 +69,7 @@ KRYLOV_FROM = 900_000
 #: PARDISO factorises the tangent of a discretisation that asks for it
 #: (:attr:`Layout.single`) in single precision and refines its solves in double
 #: (:class:`_Pardiso`). On the first tangent of the bench step (Nitsche EFG, 10^5 nodes)
-#: the single factorisation took 17.0 s against 28.4 s, and each refinement divides the
+#: the single factorisation took 16.2 s against 28.2 s, and each refinement divides the
 #: scaled residual by about 3000 (``python docs/krylov_study.py --single``).
 SINGLE = True
 #: The relative residual (scaled rows) a single-precision solve is refined to, whatever
