@@ -23,6 +23,7 @@ import numpy as np
 from scipy.spatial import ConvexHull
 
 from efg.quadrature import delaunay_cells
+from soil.kinematics import determinant, inverse
 from soil.quality import cell_quality
 
 
@@ -75,7 +76,7 @@ def deformation_gradient(initial, current, triangles):
     triangles = np.asarray(triangles)
     dX = _edges(initial, triangles)
     dx = _edges(current, triangles)
-    return dx @ np.linalg.inv(dX)
+    return dx @ inverse(dX)
 
 
 def shear_strain(F):
@@ -105,7 +106,7 @@ def shear_strain(F):
         e = np.concatenate([np.log(stretch), np.zeros(F.shape[:-2] + (1,))], axis=-1)
         deviator = e - e.mean(axis=-1, keepdims=True)
         eps = np.sqrt(2.0 / 3.0 * (deviator ** 2).sum(axis=-1))
-    return np.where(np.linalg.det(F) > 0, eps, np.nan)
+    return np.where(determinant(F) > 0, eps, np.nan)
 
 
 def nodal(values, initial, triangles):
@@ -177,4 +178,4 @@ def _edges(points, triangles):
 
 def _signed_area(points, triangles):
     """Signed area of each triangle [m^2], positive counter-clockwise."""
-    return 0.5 * np.linalg.det(_edges(points, triangles))
+    return 0.5 * determinant(_edges(points, triangles))

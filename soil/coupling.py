@@ -24,7 +24,7 @@ from tqdm import tqdm
 
 from soil.errors import ConvergenceError
 from soil.geostatic import buoyant_weight, initial_state
-from soil.kinematics import invariants, strain_increment
+from soil.kinematics import determinant, invariants, inverse, strain_increment
 from soil.linear import FORCING_MAX, factorise, forcing, identity, must_refactorise
 from soil.quality import cell_quality
 from soil.results import Result
@@ -360,10 +360,10 @@ def material_update(material, stress, state, H, timings, where="an integration p
         Where ``J <= 0`` (the step inverts ``where``).
     """
     F = np.eye(2) + H
-    J = np.linalg.det(F)
+    J = determinant(F)
     if not np.all(J > 0):
         raise ConvergenceError(f"{where} inverts (J = {J.min():.3g})")
-    Finv = np.linalg.inv(F)
+    Finv = inverse(F)
     deps, dw = strain_increment(H, J)
     with timed(timings, "material_s"):
         stress, state, tangent = material.update(stress, state, deps, dw)

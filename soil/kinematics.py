@@ -125,6 +125,49 @@ def cauchy_traction(stress, normal):
                     axis=-1)
 
 
+def determinant(A):
+    """Determinant of each 2 x 2 matrix, in closed form (numpy's batched LAPACK call costs
+    twenty times more on small matrices).
+
+    Parameters
+    ----------
+    A : ndarray, shape (..., 2, 2)
+
+    Returns
+    -------
+    ndarray, shape (...)
+
+    Examples
+    --------
+    >>> float(determinant(np.array([[2.0, 1.0], [1.0, 3.0]])))
+    5.0
+    """
+    return A[..., 0, 0] * A[..., 1, 1] - A[..., 0, 1] * A[..., 1, 0]
+
+
+def inverse(A):
+    """Inverse of each 2 x 2 matrix, in closed form (the adjugate over the determinant).
+
+    Parameters
+    ----------
+    A : ndarray, shape (..., 2, 2)
+        Regular matrices: a singular one gives infinite or NaN entries.
+
+    Returns
+    -------
+    ndarray, shape (..., 2, 2)
+
+    Examples
+    --------
+    >>> A = np.array([[2.0, 1.0], [1.0, 3.0]])
+    >>> bool(np.allclose(inverse(A) @ A, np.eye(2)))
+    True
+    """
+    adjugate = np.stack([np.stack([A[..., 1, 1], -A[..., 0, 1]], -1),
+                         np.stack([-A[..., 1, 0], A[..., 0, 0]], -1)], -2)
+    return adjugate / determinant(A)[..., None, None]
+
+
 def strain_increment(H, J):
     """Midpoint stretching increment and spin of a step from its displacement gradient.
 
@@ -143,7 +186,7 @@ def strain_increment(H, J):
     dw : ndarray, shape (P,)
         Spin increment ``skew(H F_(1/2)^-1)_xy`` for the Hughes-Winget rotation.
     """
-    L = H @ np.linalg.inv(np.eye(2) + 0.5 * H)
+    L = H @ inverse(np.eye(2) + 0.5 * H)
     exx, eyy = L[:, 0, 0], L[:, 1, 1]
     shift = 0.5 * (np.log(J) - exx - eyy)
     deps = np.stack([exx + shift, eyy + shift, 0 * exx, L[:, 0, 1] + L[:, 1, 0]], 1)

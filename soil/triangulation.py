@@ -10,6 +10,7 @@ triangle behind a boundary edge that is no Delaunay edge when that gap is one tr
 import numpy as np
 from scipy.spatial import Delaunay
 
+from soil.kinematics import determinant
 from soil.polygon import inside
 
 DEGENERATE = 1e-12
@@ -45,7 +46,7 @@ def delaunay_triangles(nodes, boundary):
     """
     triangles = Delaunay(nodes).simplices
     edges = nodes[triangles[:, 1:]] - nodes[triangles[:, :1]]
-    jac = edges[:, 0, 0] * edges[:, 1, 1] - edges[:, 0, 1] * edges[:, 1, 0]
+    jac = determinant(edges)
     triangles[jac < 0] = triangles[jac < 0][:, [0, 2, 1]]
     jac = np.abs(jac)
     keep = jac > DEGENERATE * jac.mean()
