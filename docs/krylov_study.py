@@ -12,9 +12,10 @@ on both back-ends; prints Newton, FGMRES and cut-back counts, and the largest di
 of p, q and the settlement relative to their range, or the failure.
 
 ``python docs/krylov_study.py --symmetric [nodes ...]`` (default 1e4 1e5; about 5
-minutes): the first tangent of the bench case's step (penalty EFG, as ``make bench`` runs
-it on PARDISO) factorised as LU of ``K`` and as PARDISO's LDL^T of ``sym(K)``; prints
-their times and flops, one back-solve of each, and FGMRES on ``K`` preconditioned by the
+minutes): the first tangent of the bench case's step (EFG with the penalty, as ``make
+bench`` runs it on PARDISO, and with Nitsche's conditions and the perturbation) factorised
+as LU of ``K`` and as PARDISO's LDL^T of ``sym(K)``; prints how far ``K`` is from
+symmetric (whole and displacement block), their times and flops, one back-solve of each, and FGMRES on ``K`` preconditioned by the
 LDL^T (rows scaled as Newton scales them) to 1e-4, 1e-8 and 1e-10: iterations, time and
 the largest difference from the LU solution relative to its largest entry.
 
@@ -96,6 +97,7 @@ each is 4 kB of freshly touched memory).
 """
 
 import dataclasses
+import itertools
 import sys
 import time
 from contextlib import contextmanager
@@ -343,18 +345,23 @@ def first_tangent(nodes, krylov=False):
 
 
 def symmetric(sizes):
-    """LU of K against LDL^T of sym(K) as FGMRES's preconditioner, per size."""
+    """LU of K against LDL^T of sym(K) as FGMRES's preconditioner, per size, on the
+    penalty tangent and on the Nitsche one (with the perturbation stabilisation)."""
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
     from pyamg.krylov import fgmres
 
     from soil.linear import _Pardiso
 
-    for nodes in sizes:
-        K, layout = first_tangent(nodes)
+    for nodes, nitsche in itertools.product(sizes, (False, True)):
+        K, layout = first_tangent(nodes, krylov=nitsche)
         K = sp.csr_matrix(K)
-        print(f"{nodes} nodes, {K.shape[0]} unknowns, ||K - K^T|| / ||K|| = "
-              f"{spla.norm(K - K.T) / spla.norm(K):.1e}", flush=True)
+        u = np.flatnonzero(np.asarray(layout.fields) < 2)
+        Kuu = K[u][:, u]
+        print(f"{nodes} nodes, {'Nitsche' if nitsche else 'penalty'}, {K.shape[0]} unknowns, "
+              f"||K - K^T|| / ||K|| = {spla.norm(K - K.T) / spla.norm(K):.1e} "
+              f"(displacement block {spla.norm(Kuu - Kuu.T) / spla.norm(Kuu):.1e})",
+              flush=True)
         b = np.random.default_rng(0).standard_normal(K.shape[0]) * layout.scales
         solves, solutions = {}, {}
         for name, sym in (("LU of K", False), ("LDL^T of sym(K)", True)):

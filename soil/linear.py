@@ -39,6 +39,7 @@ contracting (:data:`soil.coupling.SYMMETRIC_FIRST`, off: it does not pay on our
 tangents). SuperLU has no symmetric mode and factorises ``K``.
 """
 
+import ctypes
 import os
 import weakref
 from contextlib import contextmanager
@@ -415,6 +416,7 @@ class _Pardiso(_Factor):
         self.symmetric, self.scales, self.flops = symmetric, scales, 0.0
         self.A = _upper_symmetric(K) if symmetric else sp.csr_matrix(K, dtype=float)
         self.A.sort_indices()
+        self.one_based = _one_based(self.A)
         if not np.diff(self.A.indptr).all():
             raise ConvergenceError("the tangent is singular (it has an empty row)")
         self.grouped, self.solver = groups is not None, _solver(mtype=-2 if symmetric else 11)
@@ -434,7 +436,7 @@ class _Pardiso(_Factor):
     def solve(self, b, rtol=None):
         """The solution of ``K x = b``; a single-precision factor refines it in double to
         the scaled relative residual :data:`REFINED` (``rtol`` is ignored)."""
-        b = np.asarray(b, dtype=float)
+        b = np.ascontiguousarray(b, dtype=float)
         if self.single:
             x = self._refined(b)
             if x is not None:
@@ -484,9 +486,43 @@ class _Pardiso(_Factor):
         """PARDISO phase 12 (analysis, factorisation) or 33 (solve), on :attr:`A32` while
         the factor is single. ``PyPardisoSolver``'s own ``factorize`` and ``solve`` keep a
         copy of the matrix and compare it on every solve, at a cost that grows with the
-        matrix; this object owns its matrix."""
+        matrix; this object owns its matrix and its 1-based indices (:func:`_pardiso`)."""
         self.solver.set_phase(phase)
-        return self.solver._call_pardiso(self.A if self.A32 is None else self.A32, b)
+        return _pardiso(self.solver, (self.A if self.A32 is None else self.A32).data,
+                        self.one_based, b)
+
+
+def _one_based(A):
+    """The CSR index arrays ``(indptr + 1, indices + 1)`` of ``A`` as int32, PARDISO's."""
+    return A.indptr.astype(np.int32) + 1, A.indices.astype(np.int32) + 1
+
+
+def _pardiso(solver, data, one_based, b):
+    """One call of MKL's ``pardiso`` in the ``PyPardisoSolver``'s current phase: its
+    ``_call_pardiso`` with the matrix given as its values ``data`` (float64, or float32 for a
+    single-precision factor) and its :func:`_one_based` indices, which pypardiso would
+    convert again on every call (0.04 s a call at 10^5 EFG nodes). ``b`` is C-contiguous
+    and of the type of ``data``; returns ``x`` of that type."""
+    import pypardiso
+
+    ia, ja = one_based
+    x, error = np.zeros_like(b), ctypes.c_int32(0)
+    integer, real = ctypes.POINTER(ctypes.c_int32), ctypes.POINTER(ctypes.c_double)
+
+    def value(number):
+        return ctypes.byref(ctypes.c_int32(number))
+
+    solver._mkl_pardiso(solver.pt.ctypes.data_as(ctypes.POINTER(solver._pt_type[0])),
+                        value(1), value(1), value(solver.mtype), value(solver.phase),
+                        value(len(ia) - 1), data.ctypes.data_as(real),
+                        ia.ctypes.data_as(integer), ja.ctypes.data_as(integer),
+                        solver.perm.ctypes.data_as(integer),
+                        value(1 if b.ndim == 1 else b.shape[1]),
+                        solver.iparm.ctypes.data_as(integer), value(solver.msglvl),
+                        b.ctypes.data_as(real), x.ctypes.data_as(real), ctypes.byref(error))
+    if error.value:
+        raise pypardiso.pardiso_wrapper.PyPardisoError(error.value)
+    return x
 
 
 def _settings(grouped, symmetric, single=False):
@@ -538,7 +574,7 @@ def _grouped_order(A, groups):
         ordering.set_iparm(index, value)
     ordering.perm = np.zeros(graph.shape[0], np.int32)
     ordering.set_phase(11)           # analysis only: METIS fills ``perm`` (iparm 5 = 2)
-    ordering._call_pardiso(graph, np.zeros((graph.shape[0], 1)))
+    _pardiso(ordering, graph.data, _one_based(graph), np.zeros((graph.shape[0], 1)))
     ordering.free_memory(everything=True)
     rank = np.empty(graph.shape[0] + 1, np.int64)
     rank[ordering.perm - 1] = np.arange(graph.shape[0])
