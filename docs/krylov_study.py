@@ -11,13 +11,14 @@ memory.
 on both back-ends; prints Newton, FGMRES and cut-back counts, and the largest difference
 of p, q and the settlement relative to their range, or the failure.
 
-``python docs/krylov_study.py --symmetric [nodes ...]`` (default 1e4 1e5; about 5
+``python docs/krylov_study.py --symmetric [nodes ...]`` (default 1e4 1e5; about 6
 minutes): the first tangent of the bench case's step (EFG with the penalty, as ``make
 bench`` runs it on PARDISO, and with Nitsche's conditions and the perturbation) factorised
 as LU of ``K`` and as PARDISO's LDL^T of ``sym(K)``; prints how far ``K`` is from
-symmetric (whole and displacement block), their times and flops, one back-solve of each, and FGMRES on ``K`` preconditioned by the
-LDL^T (rows scaled as Newton scales them) to 1e-4, 1e-8 and 1e-10: iterations, time and
-the largest difference from the LU solution relative to its largest entry.
+symmetric (whole and displacement block), their times and flops, one back-solve of each,
+and FGMRES on ``K`` preconditioned by the LDL^T (rows scaled as Newton scales them) to
+1e-4, 1e-8 and 1e-10: iterations, time and the largest difference from the LU solution
+relative to its largest entry.
 
 ``python docs/krylov_study.py --single [nodes ...]`` (default 3e4 1e5; about 20 minutes):
 PARDISO's factorisation of the first tangent of the bench step as the Krylov sizes run it
