@@ -110,7 +110,8 @@ class ShapeFunctions:
         return self.phi.indices
 
     @classmethod
-    def build(cls, nodes, points, weight="quartic", scale=DEFAULT_SCALE, key="efg.scale_u"):
+    def build(cls, nodes, points, weight="quartic", scale=DEFAULT_SCALE, key="efg.scale_u",
+              support=None):
         """Shape functions and gradients of ``nodes`` at ``points``.
 
         Parameters
@@ -127,6 +128,10 @@ class ShapeFunctions:
         key : str
             The case entry ``scale`` comes from (``efg.scale_u`` or ``efg.scale_p``),
             named in the message when the supports are too small.
+        support : ndarray, shape (n_nodes,), optional
+            The radii [m] of these nodes at this scale (:func:`support_radii`, the
+            ``support`` of shape functions built before on the same nodes), so that a
+            second set of points does not search the nodes' neighbours again.
 
         Returns
         -------
@@ -155,7 +160,7 @@ class ShapeFunctions:
         scale = float(scale)
         require(np.isfinite(scale) and scale > 0, f"scale factor = {scale} must be "
                 f"positive (usually 1.2 to 1.5, e.g. {DEFAULT_SCALE})")
-        support = support_radii(nodes, scale)
+        support = support_radii(nodes, scale) if support is None else support
         indptr, indices = neighbours(nodes, points, support)
         phi, dx, dy, rcond = _shape_kernel(points, nodes, support, indptr, indices,
                                            weight.kind, weight.c, RCOND_MIN)

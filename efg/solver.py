@@ -665,10 +665,14 @@ def _discretise(model, nodes, evaluation, timings, quad=None):
         quad = _cells(model, nodes) if quad is None else quad
         bp = boundary_points(nodes, model.loop, model.edges)
     same = (s.weight_u, s.scale_u) == (s.weight_p, s.scale_p)
+    supports = {}                        # support radii by scale, searched once
 
     def build(points, field="u"):
-        return ShapeFunctions.build(nodes, points, getattr(s, f"weight_{field}"),
-                                    getattr(s, f"scale_{field}"), key=f"efg.scale_{field}")
+        scale = getattr(s, f"scale_{field}")
+        shape = ShapeFunctions.build(nodes, points, getattr(s, f"weight_{field}"), scale,
+                                     key=f"efg.scale_{field}", support=supports.get(scale))
+        supports.setdefault(scale, shape.support)
+        return shape
 
     with timed(timings, "shape_functions_s"):
         su, sub = build(quad.points), build(bp.points)
