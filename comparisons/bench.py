@@ -12,7 +12,7 @@ Three measurements, all on this machine in one command (never timed tests):
    step of 0.2 % axial strain) at about 10^3, 3 x 10^3, ..., 10^6 nodes (:data:`SIZES`)
    for ``efg``, ``fem-p1p1``, ``fem-th`` and ``fem-p1p1-stab`` on the same vertices, with
    the Cam-clay skeleton of the case and with a linear elastic one. The rule that bounds
-   the whole run (33 minutes on 2 cores, the four large runs at most 4 x 900 s of it):
+   the whole run (28 minutes on 2 cores, the four large runs at most 4 x 900 s of it):
    from 3 x 10^5 nodes (:data:`LARGE_FROM`) only ``efg`` and ``fem-p1p1-stab`` with
    Cam-clay run, and a run is stopped after 900 s there, 240 s below
    (:func:`time_limit`). The linear solver is chosen by size (:func:`solver_for`): the direct
@@ -225,7 +225,8 @@ def plan(sizes=SIZES, methods=METHODS, materials=MATERIALS):
                 if nodes >= LARGE_FROM and not (method in LARGE_METHODS
                                                 and material in LARGE_MATERIALS):
                     continue
-                solvers = [(solver_for(nodes), solver_for(nodes) == "krylov")]
+                default = solver_for(nodes)
+                solvers = [(default, default == "krylov")]
                 if method in LARGE_METHODS and BOTH_FROM <= nodes < KRYLOV_FROM:
                     if method == "efg" and direct() == "pardiso":
                         solvers.append(("pardiso", True))
