@@ -212,8 +212,13 @@ class _System:
                 self.nitsche = _Nitsche(model, points, disc, self.dt,
                                         (self.stress_n, self.state_n["v"]))
         self.weight = buoyant_weight(case, self.state_n["v"])
-        self.traction = (cauchy_traction(model.sigma0_bp, disc.bp.normal)
-                         + bc.traction * bc.loaded * case.loading.factor(t1))
+        initial = cauchy_traction(model.sigma0_bp, disc.bp.normal)     # (G, 2)
+        self.initial_reaction = np.zeros_like(initial)
+        if self.nitsche is not None:     # its flux through a constrained component is
+            held = self.nitsche.terms.mask[:, :2]     # the whole reaction, sigma0's too
+            self.initial_reaction = held * disc.bp.weights[:, None] * initial
+            initial = np.where(held, 0.0, initial)
+        self.traction = initial + bc.traction * bc.loaded * case.loading.factor(t1)
         self.plate_force = case.plate_force(t1)
         self.rigid_w = (self.nitsche is None) * self.alpha_u * disc.bp.weights * bc.rigid
         self.c_mean = disc.tp.phi.T @ disc.w
@@ -306,7 +311,12 @@ class _System:
         Nitsche reaction over the plate's points."""
         if self.nitsche is None:
             return -np.sum(self.rigid_w * self.plate_gap)
-        return np.sum(self.nitsche.reaction(self.gaps)[:, 1] * self.disc.bc.rigid)
+        return np.sum(self._nitsche_reaction()[:, 1] * self.disc.bc.rigid)
+
+    def _nitsche_reaction(self):
+        """Nitsche's reaction (G, 2) beyond the initial stress's traction, the force of
+        the supports on the soil that the penalty's gap forces are."""
+        return self.nitsche.reaction(self.gaps)[:, :2] - self.initial_reaction
 
     def _plate_border(self, boundary):
         """Column, row and corner of the plate's settlement in the tangent (None without
@@ -368,7 +378,7 @@ class _System:
             force = -self.alpha_u * disc.bp.weights * bc.constrained[:, 1] * self.gap[:, 1]
             force -= self.rigid_w * self.plate_gap
         else:
-            force = self.nitsche.reaction(self.gaps)[:, 1]
+            force = self._nitsche_reaction()[:, 1]
         on = bc.segment >= 0
         reactions = np.bincount(bc.segment[on], force[on],
                                 minlength=len(self.model.case.boundary.segments()))
