@@ -3,7 +3,7 @@ sees (issue 17, item 1).
 
 * :func:`accuracy`: the verification cases with either method, each with its error
   against the closed form (patch test, cantilever, Terzaghi, Mandel, unconfined
-  compression);
+  compression, simple shear; the strip footing against fem-th);
 * :func:`eigenvalue_strips`: Nitsche's eigenvalue bound on strips of 0 to 3 neighbour
   rings against the whole domain's (:func:`efg.nitsche.largest_eigenvalue`);
 * :func:`conditioning`: the first Newton tangent of a case at a few thousand nodes, its
@@ -17,6 +17,7 @@ conditioning, 10 min for the accuracy on 2 shared cores).
 
 import itertools
 import time
+from functools import cache
 
 import numpy as np
 import pandas as pd
@@ -28,10 +29,14 @@ from efg import nitsche, quadrature
 from efg import solver, statics
 from efg.boundary import boundary_points, segment_edges
 from efg.mls import ShapeFunctions
+from fem_reference.solver import solve as fem_solve
 from soil.coupling import TIMERS
 from soil.problems import load_case
 
 METHODS = ("penalty", "nitsche")
+#: The strip footing's first 0.05 B of settlement in 10 steps (undrained, still far
+#: below the collapse load).
+FOOTING = ["time.end=5", "time.steps=10"]
 
 
 def accuracy(methods=METHODS):
@@ -45,7 +50,9 @@ def accuracy(methods=METHODS):
         per cell type and gradient correction, and per refinement for the cantilever;
         Terzaghi's (5 x 41 nodes) :func:`comparisons.metrics.terzaghi_errors`, Mandel's
         :func:`comparisons.metrics.mandel_errors`, the unconfined compression's path error
-        over p'0 and largest ERR; each coupled run's Newton iterations and wall time [s].
+        over p'0 and largest ERR, the simple shear's (50 steps) path error, the strip
+        footing's pressure against fem-th's (:data:`FOOTING`); each coupled run's Newton
+        iterations and wall time [s].
     """
     rows = []
     for method, cells, correction in itertools.product(methods, ("delaunay", "squares"),
@@ -68,7 +75,8 @@ def _coupled(method):
     """Rows of :func:`accuracy` for the coupled cases with one method."""
     rows = []
     runs = {"terzaghi": ["discretisation.nx=5", "discretisation.ny=41"], "mandel": [],
-            "unconfined-compression": []}
+            "unconfined-compression": [], "simple-shear": ["time.steps=50"],
+            "strip-footing": FOOTING}
     for name, overrides in runs.items():
         tic = time.perf_counter()
         result = solver.solve(load_case(name, overrides + [f"efg.essential={method}"]),
@@ -79,6 +87,11 @@ def _coupled(method):
             errors.update(errors.pop("window_errors"))
         elif name == "mandel":
             errors = mandel_errors(result)
+        elif name == "strip-footing":
+            errors = {"pressure_vs_fem_th": _against_taylor_hood(result.history)}
+        elif name == "simple-shear":
+            errors = {"path_error": path_error(result.history, result.case.material(),
+                                               "undrained-simple-shear")}
         else:
             history = result.history
             errors = {"path_error": path_error(history, result.case.material()),
@@ -89,6 +102,20 @@ def _coupled(method):
         setting = " ".join(overrides) or "built-in"
         rows += [(name, setting, method, k, float(v)) for k, v in errors.items()]
     return rows
+
+
+def _against_taylor_hood(history):
+    """Largest relative difference of the footing pressure of ``history`` from fem-th's
+    on the same :data:`FOOTING` run (no closed form before the collapse load)."""
+    pressure = history["pressure@footing"].to_numpy()
+    return float(np.abs(pressure / _taylor_hood_pressure() - 1).max())
+
+
+@cache
+def _taylor_hood_pressure():
+    """fem-th's footing pressure [kPa] per step of the :data:`FOOTING` run."""
+    result = fem_solve(load_case("strip-footing", FOOTING), "fem-th", progress=False)
+    return result.history["pressure@footing"].to_numpy()
 
 
 def eigenvalue_strips(levels=((13, 4), (25, 7), (49, 13), (97, 25)), rings=(0, 1, 2, 3)):
