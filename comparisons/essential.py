@@ -4,6 +4,8 @@ sees (issue 17, item 1).
 * :func:`accuracy`: the verification cases with either method, each with its error
   against the closed form (patch test, cantilever, Terzaghi, Mandel, unconfined
   compression, simple shear; the strip footing against fem-th);
+* :func:`confined`: how near singular the undrained simple shear's tangent is with
+  either method, with and without the pressure stabilisation;
 * :func:`eigenvalue_strips`: Nitsche's eigenvalue bound on strips of 0 to 3 neighbour
   rings against the whole domain's (:func:`efg.nitsche.largest_eigenvalue`);
 * :func:`conditioning`: the first Newton tangent of a case at a few thousand nodes, its
@@ -216,6 +218,38 @@ def conditioning(cases=CONDITIONING_CASES, methods=METHODS, rtols=(1e-3, 1e-6, 1
     return pd.DataFrame(summary), pd.DataFrame(krylov)
 
 
+def confined(methods=METHODS, stabilisations=("none", "perturbation"), small=1e-6):
+    """The singular values of the first Newton tangent of the undrained simple shear
+    (every edge prescribed, k = 0: the pore pressure is defined up to the constant
+    that the mean-pressure multiplier pins), per method and ``efg.stabilisation``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``method, stabilisation``, ``condition`` (largest over smallest singular value of
+        the tangent with rows and columns scaled by ``|K_ii|^(-1/2)``), ``below`` (how many
+        are under ``small`` times the largest), ``smallest`` (the smallest over the
+        largest) and ``spread``, max - min of the nodal pore pressure [kPa] after 10
+        steps to gamma = 0.06 (exact: uniform, so 0).
+    """
+    rows = []
+    for method, stabilisation in itertools.product(methods, stabilisations):
+        overrides = (f"efg.essential={method}", f"efg.stabilisation={stabilisation}")
+        K, _, _, _ = captured("simple-shear", overrides)
+        run = solver.solve(load_case("simple-shear", ["time.end=6", "time.steps=10",
+                                                      *overrides]), progress=False)
+        p = run.snapshots[-1].point_data["p_w"]
+        d = np.abs(K.diagonal())
+        scale = 1 / np.sqrt(np.where(d > 0, d, 1.0))
+        values = np.linalg.svd((sp.diags(scale) @ K @ sp.diags(scale)).toarray(),
+                               compute_uv=False)
+        rows.append({"method": method, "stabilisation": stabilisation,
+                     "condition": values[0] / values[-1],
+                     "below": int((values < small * values[0]).sum()),
+                     "smallest": values[-1] / values[0], "spread": p.max() - p.min()})
+    return pd.DataFrame(rows)
+
+
 def _ilu(K, **options):
     """scipy's incomplete LU of K as a LinearOperator."""
     ilu = spla.spilu(sp.csc_matrix(K), **options)
@@ -285,6 +319,8 @@ def main():
     print(summary.to_string(index=False, float_format="{:.3g}".format))
     print("\n## GMRES + incomplete LU: residual reached against the error\n")
     print(krylov.to_string(index=False, float_format="{:.3g}".format))
+    print("\n## Undrained simple shear, first tangent: scaled singular values\n")
+    print(confined().to_string(index=False, float_format="{:.3g}".format))
     print("\n## Nitsche's eigenvalue bound on boundary strips (cantilever, lambda h / M)\n")
     print(eigenvalue_strips().to_string(index=False, float_format="{:.4g}".format))
     print("\n## Accuracy, penalty and Nitsche\n")
