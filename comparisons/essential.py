@@ -4,6 +4,8 @@ sees (issue 17, item 1).
 * :func:`accuracy`: the verification cases with either method, each with its error
   against the closed form (patch test, cantilever, Terzaghi, Mandel, unconfined
   compression, simple shear; the strip footing against fem-th);
+* :func:`footing_reach`: the strip-footing study's runs with either method, how far
+  they get and how close to fem-th;
 * :func:`confined`: how near singular the undrained simple shear's tangent is with
   either method, with and without the pressure stabilisation;
 * :func:`eigenvalue_strips`: Nitsche's eigenvalue bound on strips of 0 to 3 neighbour
@@ -14,7 +16,7 @@ sees (issue 17, item 1).
   error of its solution measured against the direct solve.
 
 ``python -m comparisons.essential`` prints the tables (measured: 5 min for the
-conditioning, 10 min for the accuracy on 2 shared cores).
+conditioning, 10 min for the accuracy, 5 min for the footing runs on 2 cores).
 """
 
 import itertools
@@ -26,6 +28,8 @@ import pandas as pd
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from comparisons import footing
+from comparisons.footing_grids import refined
 from comparisons.metrics import mandel_errors, path_error, terzaghi_errors
 from efg import nitsche, quadrature
 from efg import solver, statics
@@ -218,6 +222,26 @@ def conditioning(cases=CONDITIONING_CASES, methods=METHODS, rtols=(1e-3, 1e-6, 1
     return pd.DataFrame(summary), pd.DataFrame(krylov)
 
 
+def footing_reach(methods=METHODS, densities=(4, 8)):
+    """The strip-footing study's runs (:mod:`comparisons.footing`, to 0.5 B in 100 steps)
+    with either method and with fem-th, on ``densities`` spacings per B at the footing:
+    how far each gets and how far its curve lies from fem-th's on the finest.
+
+    Returns
+    -------
+    pandas.DataFrame
+        :func:`comparisons.footing.summary`'s ``label, nodes, reached, at_0.1B, error,
+        run_time``, ``error`` against fem-th on ``densities[-1]``.
+    """
+    steps = load_case(footing.CASE).time.steps
+    variants = [(f"efg, {m}", "efg", (f"efg.essential={m}",)) for m in methods]
+    study = [(label, method, core, steps, (*refined(core), *extra))
+             for core in densities
+             for label, method, extra in (*variants, ("fem-th", "fem-th", ()))]
+    table = footing.summary(footing.curves(study), reference=("fem-th", densities[-1]))
+    return table[["label", "nodes", "reached", "at_0.1B", "error", "run_time"]]
+
+
 def confined(methods=METHODS, stabilisations=("none", "perturbation"), small=1e-6):
     """The singular values of the first Newton tangent of the undrained simple shear
     (every edge prescribed, k = 0: the pore pressure is defined up to the constant
@@ -319,6 +343,8 @@ def main():
     print(summary.to_string(index=False, float_format="{:.3g}".format))
     print("\n## GMRES + incomplete LU: residual reached against the error\n")
     print(krylov.to_string(index=False, float_format="{:.3g}".format))
+    print("\n## Strip footing to 0.5 B: reach and error against fem-th\n")
+    print(footing_reach().to_string(index=False, float_format="{:.3g}".format))
     print("\n## Undrained simple shear, first tangent: scaled singular values\n")
     print(confined().to_string(index=False, float_format="{:.3g}".format))
     print("\n## Nitsche's eigenvalue bound on boundary strips (cantilever, lambda h / M)\n")
