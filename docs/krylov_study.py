@@ -20,6 +20,11 @@ and FGMRES on ``K`` preconditioned by the LDL^T (rows scaled as Newton scales th
 1e-4, 1e-8 and 1e-10: iterations, time and the largest difference from the LU solution
 relative to its largest entry.
 
+``python docs/krylov_study.py --orderings [nodes ...]`` (default 3e3 1e4; about 3
+minutes): SuperLU's factorisation of the first tangent of the bench step of EFG, fem-th,
+fem-q2q1 and fem-p1p1-stab with scipy's default column ordering (COLAMD) and with
+``soil.linear.SUPERLU_ORDERING``: time and the factor's entries.
+
 ``python docs/krylov_study.py --single [nodes ...]`` (default 3e4 1e5; about 20 minutes):
 PARDISO's factorisation of the first tangent of the bench step as the Krylov sizes run it
 (Nitsche, stabilised) in double and in single precision: time, flops, perturbed pivots,
@@ -343,6 +348,38 @@ def first_tangent(nodes, krylov=False):
     except _Captured as captured:
         return captured.args
     raise RuntimeError("the step did not factorise")
+
+
+def orderings(sizes, methods=("efg", "fem-th", "fem-q2q1", "fem-p1p1-stab")):
+    """SuperLU's factorisation of each method's first bench tangent (Cam-clay; EFG as
+    ``make bench`` runs it on a direct solver) with scipy's default column ordering,
+    COLAMD, and with :data:`soil.linear.SUPERLU_ORDERING`: time and fill."""
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    import efg.solver
+    import fem_reference.solver
+    from soil.linear import SUPERLU_ORDERING
+
+    def capture(original):
+        def captured(K, layout=None, symmetric=False):
+            raise _Captured(K, layout)
+        return captured
+
+    for nodes, method in itertools.product(sizes, methods):
+        try:
+            with _factorising(capture), linear_solver("superlu"):
+                case = compression(nodes)
+                (efg.solver.solve(case, progress=False) if method == "efg"
+                 else fem_reference.solver.solve(case, method, progress=False))
+        except _Captured as captured:
+            K = sp.csc_matrix(captured.args[0])
+        for ordering in ("COLAMD", SUPERLU_ORDERING):
+            tic = time.perf_counter()
+            lu = spla.splu(K, permc_spec=ordering)
+            print(f"{method} {nodes} nodes, {K.shape[0]} unknowns, {ordering}: "
+                  f"{time.perf_counter() - tic:.2f} s, L + U {lu.L.nnz + lu.U.nnz:.3g} "
+                  "entries", flush=True)
 
 
 def symmetric(sizes):
@@ -738,6 +775,8 @@ if __name__ == "__main__":
         spectral([int(float(n)) for n in sys.argv[2:]] or [100_000])
     elif sys.argv[1:2] == ["--single"]:
         single([int(float(n)) for n in sys.argv[2:]] or [30_000, 100_000])
+    elif sys.argv[1:2] == ["--orderings"]:
+        orderings([int(float(n)) for n in sys.argv[2:]] or [3_000, 10_000])
     elif sys.argv[1:2] == ["--symmetric"]:
         symmetric([int(float(n)) for n in sys.argv[2:]] or [10_000, 100_000])
     else:
