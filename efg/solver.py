@@ -409,36 +409,45 @@ class _Nitsche:
     def __init__(self, model, points, disc, dt, domain):
         sub, spb = disc.sub, disc.spb
         self.model, self.disc, self.dt = model, disc, dt
-        self.stress_n = sub.phi @ points.stress
-        self.state_n = {k: sub.phi @ v for k, v in points.state.items()}
-        self.p_n = spb.phi @ points.p
-        self.grad_p_n = _pressure_gradient(spb, points.p)
-        self.terms = _nitsche_terms(model, disc, dt, domain,
-                                    (self.stress_n, self.state_n["v"]))
+        stress_n, state_n = sub.phi @ points.stress, {k: sub.phi @ v
+                                                      for k, v in points.state.items()}
+        self.terms = _nitsche_terms(model, disc, dt, domain, (stress_n, state_n["v"]))
+        # the weak form only where a component is held: a free point carries no term
+        # (and the soil at a free surface may be past what its return mapping handles)
+        self.held = h = np.flatnonzero(self.terms.mask.any(axis=1))
+        self.stress_n, self.state_n = stress_n[h], {k: v[h] for k, v in state_n.items()}
+        self.p_n = (spb.phi @ points.p)[h]
+        self.grad_p_n = _pressure_gradient(spb, points.p)[h]
 
     def residual(self, du, p, gaps, timings):
         """Residual coefficients (G, 3, 3) of the iterate ``du``, ``p`` with the gaps
         (G, 3) of ``(ux, uy, p_w)``."""
-        model, disc, fluid = self.model, self.disc, self.model.case.fluid
+        model, disc, fluid, h = self.model, self.disc, self.model.case.fluid, self.held
         (self.stress, _, self.material_tangent, self.J, self.Finv,
          _) = material_update(model.material, self.stress_n, self.state_n,
-                              _gradient(disc.sub, du, len(p)), timings, "a boundary point")
-        p_b = disc.spb.phi @ p
+                              _gradient(disc.sub, du, len(p))[h], timings,
+                              "a boundary point")
+        p_b = (disc.spb.phi @ p)[h]
         self.total = weakform.total_stress(self.stress, p_b, fluid)
-        self.grad_p = _pressure_gradient(disc.spb, p)
-        self.flux = weakform.residual(self.total, self.J, self.Finv, disc.bp.weights, p_b,
-                                      self.p_n, self.grad_p, fluid, self.dt, model.beta,
-                                      self.grad_p_n, self.state_n["v"])
+        self.grad_p = _pressure_gradient(disc.spb, p)[h]
+        self.flux = np.zeros(gaps.shape + (3,))
+        self.flux[h] = weakform.residual(self.total, self.J, self.Finv,
+                                         disc.bp.weights[h], p_b, self.p_n, self.grad_p,
+                                         fluid, self.dt, model.beta, self.grad_p_n,
+                                         self.state_n["v"])
         return self.terms.residual(self.flux, gaps)
 
     def tangent(self):
         """Tangent coefficients (:class:`soil.weakform.Coefficients` of 3 x 3 fields) at
         the last :meth:`residual`: :meth:`efg.nitsche.Nitsche.tangent` of the weak form's
-        tangent at the boundary points."""
+        tangent at the boundary points (zero at the free ones)."""
         c = weakform.tangent(self.material_tangent, self.stress, self.total, self.J,
-                             self.Finv, self.disc.bp.weights, self.model.case.fluid,
-                             self.dt, self.model.beta, self.state_n["v"], self.grad_p)
-        return self.terms.tangent(c)
+                             self.Finv, self.disc.bp.weights[self.held],
+                             self.model.case.fluid, self.dt, self.model.beta,
+                             self.state_n["v"], self.grad_p)
+        values = np.zeros((len(self.disc.bp.weights), c.values.shape[1]))
+        values[self.held] = c.values
+        return self.terms.tangent(replace(c, values=values))
 
     def reaction(self, gaps):
         """Force of the support on the soil at each point (G, 3) at the last
