@@ -230,8 +230,9 @@ def footing_reach(methods=METHODS, densities=(4, 8)):
     Returns
     -------
     pandas.DataFrame
-        :func:`comparisons.footing.summary`'s ``label, nodes, reached, at_0.1B, error,
-        run_time``, ``error`` against fem-th on ``densities[-1]``.
+        :func:`comparisons.footing.summary`'s ``label, nodes, reached``, the pressure at
+        :data:`comparisons.footing.AT` B, ``error`` (against fem-th on ``densities[-1]``)
+        and ``run_time``.
     """
     steps = load_case(footing.CASE).time.steps
     variants = [(f"efg, {m}", "efg", (f"efg.essential={m}",)) for m in methods]
@@ -239,7 +240,7 @@ def footing_reach(methods=METHODS, densities=(4, 8)):
              for core in densities
              for label, method, extra in (*variants, ("fem-th", "fem-th", ()))]
     table = footing.summary(footing.curves(study), reference=("fem-th", densities[-1]))
-    return table[["label", "nodes", "reached", "at_0.1B", "error", "run_time"]]
+    return table[["label", "nodes", "reached", f"at_{footing.AT:g}B", "error", "run_time"]]
 
 
 def confined(methods=METHODS, stabilisations=("none", "perturbation"), small=1e-6):
