@@ -332,10 +332,12 @@ def threads(sizes):
                   flush=True)
 
 
-def first_tangent(nodes, krylov=False):
-    """The first Newton tangent of one bench step (EFG, Cam-clay; ``krylov``: with
-    Nitsche's conditions and the perturbation stabilisation) and its layout."""
+def first_tangent(nodes, krylov=False, method="efg", solver="pardiso"):
+    """The first Newton tangent of one bench step (Cam-clay; EFG's ``krylov``: with
+    Nitsche's conditions and the perturbation stabilisation) of ``method`` on the
+    back-end ``solver``, and its layout."""
     import efg.solver
+    import fem_reference.solver
 
     def capture(original):
         def captured(K, layout=None, symmetric=False):
@@ -343,8 +345,10 @@ def first_tangent(nodes, krylov=False):
         return captured
 
     try:
-        with _factorising(capture), linear_solver("pardiso"):
-            efg.solver.solve(compression(nodes, krylov=krylov), progress=False)
+        with _factorising(capture), linear_solver(solver):
+            case = compression(nodes, krylov=krylov)
+            (efg.solver.solve(case, progress=False) if method == "efg"
+             else fem_reference.solver.solve(case, method, progress=False))
     except _Captured as captured:
         return captured.args
     raise RuntimeError("the step did not factorise")
@@ -357,23 +361,10 @@ def orderings(sizes, methods=("efg", "fem-th", "fem-q2q1", "fem-p1p1-stab")):
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
 
-    import efg.solver
-    import fem_reference.solver
     from soil.linear import SUPERLU_ORDERING
 
-    def capture(original):
-        def captured(K, layout=None, symmetric=False):
-            raise _Captured(K, layout)
-        return captured
-
     for nodes, method in itertools.product(sizes, methods):
-        try:
-            with _factorising(capture), linear_solver("superlu"):
-                case = compression(nodes)
-                (efg.solver.solve(case, progress=False) if method == "efg"
-                 else fem_reference.solver.solve(case, method, progress=False))
-        except _Captured as captured:
-            K = sp.csc_matrix(captured.args[0])
+        K = sp.csc_matrix(first_tangent(nodes, method=method, solver="superlu")[0])
         for ordering in ("COLAMD", SUPERLU_ORDERING):
             tic = time.perf_counter()
             lu = spla.splu(K, permc_spec=ordering)

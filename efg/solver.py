@@ -213,11 +213,8 @@ class _System:
                                         (self.stress_n, self.state_n["v"]))
         self.weight = buoyant_weight(case, self.state_n["v"])
         initial = cauchy_traction(model.sigma0_bp, disc.bp.normal)     # (G, 2)
-        self.initial_reaction = np.zeros_like(initial)
-        if self.nitsche is not None:     # its flux through a constrained component is
-            held = self.nitsche.terms.mask[:, :2]     # the whole reaction, sigma0's too
-            self.initial_reaction = held * disc.bp.weights[:, None] * initial
-            initial = np.where(held, 0.0, initial)
+        if self.nitsche is not None:     # held components: their flux carries it
+            initial = np.where(self.nitsche.terms.mask[:, :2], 0.0, initial)
         self.traction = initial + bc.traction * bc.loaded * case.loading.factor(t1)
         self.plate_force = case.plate_force(t1)
         self.rigid_w = (self.nitsche is None) * self.alpha_u * disc.bp.weights * bc.rigid
@@ -311,12 +308,7 @@ class _System:
         Nitsche reaction over the plate's points."""
         if self.nitsche is None:
             return -np.sum(self.rigid_w * self.plate_gap)
-        return np.sum(self._nitsche_reaction()[:, 1] * self.disc.bc.rigid)
-
-    def _nitsche_reaction(self):
-        """Nitsche's reaction (G, 2) beyond the initial stress's traction, the force of
-        the supports on the soil that the penalty's gap forces are."""
-        return self.nitsche.reaction(self.gaps)[:, :2] - self.initial_reaction
+        return np.sum(self.nitsche.reaction(self.gaps)[:, 1] * self.disc.bc.rigid)
 
     def _plate_border(self, boundary):
         """Column, row and corner of the plate's settlement in the tangent (None without
@@ -378,7 +370,7 @@ class _System:
             force = -self.alpha_u * disc.bp.weights * bc.constrained[:, 1] * self.gap[:, 1]
             force -= self.rigid_w * self.plate_gap
         else:
-            force = self._nitsche_reaction()[:, 1]
+            force = self.nitsche.reaction(self.gaps)[:, 1]
         on = bc.segment >= 0
         reactions = np.bincount(bc.segment[on], force[on],
                                 minlength=len(self.model.case.boundary.segments()))
@@ -418,6 +410,9 @@ class _Nitsche:
         self.stress_n, self.state_n = stress_n[h], {k: v[h] for k, v in state_n.items()}
         self.p_n = (spb.phi @ points.p)[h]
         self.grad_p_n = _pressure_gradient(spb, points.p)[h]
+        initial = cauchy_traction(model.sigma0_bp, disc.bp.normal)          # (G, 2)
+        self.initial = (self.terms.mask * disc.bp.weights[:, None]
+                        * np.column_stack([initial, np.zeros(len(initial))]))
 
     def residual(self, du, p, gaps, timings):
         """Residual coefficients (G, 3, 3) of the iterate ``du``, ``p`` with the gaps
@@ -451,8 +446,10 @@ class _Nitsche:
 
     def reaction(self, gaps):
         """Force of the support on the soil at each point (G, 3) at the last
-        :meth:`residual` (:meth:`efg.nitsche.Nitsche.reaction`)."""
-        return self.terms.reaction(self.flux, gaps)
+        :meth:`residual` (:meth:`efg.nitsche.Nitsche.reaction`) beyond the initial total
+        stress's traction, as the penalty's gap forces are: that traction is the
+        boundary's load where free, and part of the flux where held."""
+        return self.terms.reaction(self.flux, gaps) - self.initial
 
 
 def _nitsche_terms(model, disc, dt, domain, boundary):
