@@ -341,7 +341,8 @@ def material_update(material, stress, state, H, timings, where="an integration p
     timings : dict
         ``material_s`` is added to.
     where : str
-        What a point is, for the message of an inverted point.
+        What a point is (``"a node"``, ``"a background cell"``), for the messages of a
+        point that inverts or whose return mapping fails.
 
     Returns
     -------
@@ -357,7 +358,8 @@ def material_update(material, stress, state, H, timings, where="an integration p
     Raises
     ------
     ConvergenceError
-        Where ``J <= 0`` (the step inverts ``where``).
+        Where ``J <= 0`` (the step inverts ``where``), or the material's update fails
+        (its message, with ``where``).
     """
     F = np.eye(2) + H
     J = determinant(F)
@@ -366,7 +368,10 @@ def material_update(material, stress, state, H, timings, where="an integration p
     Finv = inverse(F)
     deps, dw = strain_increment(H, J)
     with timed(timings, "material_s"):
-        stress, state, tangent = material.update(stress, state, deps, dw)
+        try:
+            stress, state, tangent = material.update(stress, state, deps, dw)
+        except ConvergenceError as error:
+            raise ConvergenceError(f"{error} (at {where})") from None
     return stress, state, tangent, J, Finv, deps
 
 

@@ -27,6 +27,7 @@ import camclay_oracle as oracle
 from conftest import table1
 from soil import camclay
 from soil.camclay import CamClay
+from soil.coupling import material_update
 from soil.errors import ConvergenceError
 from soil.kinematics import DEVIATORIC, deviator, double_dot, hughes_winget, invariants
 
@@ -106,6 +107,16 @@ def test_a_start_in_tension_is_refused():
     stress[1] = [0.5, 0.2, 0.1, 0.0]
     with pytest.raises(ConvergenceError, match=r"p' > 0 at every point.*p' = -0\.267$"):
         clay.update(stress, state, np.zeros((3, 4)), np.zeros(3))
+
+
+def test_a_solver_names_the_kind_of_point_that_failed():
+    """:func:`soil.coupling.material_update` adds what a point is (a node, a background
+    cell, a boundary point) to the material's message."""
+    clay = table1()
+    stress, state = clay.initial_state(3)
+    stress[1] = [0.5, 0.2, 0.1, 0.0]
+    with pytest.raises(ConvergenceError, match=r"p' = -0\.267 \(at a boundary point\)$"):
+        material_update(clay, stress, state, np.zeros((3, 2, 2)), {}, "a boundary point")
 
 
 @pytest.mark.parametrize("update", [CLAYS["original"].update,
