@@ -44,3 +44,28 @@ def test_a_result_of_another_linear_solver_is_never_reused(tmp_path, monkeypatch
     monkeypatch.setattr(runner, "identity", lambda: "superlu scipy 0.0-other")
     assert job.key() != key
     assert not run([job], workers=1, cache_dir=tmp_path, progress=False)[0].cached
+
+
+def test_a_change_to_one_solver_keeps_the_other_solvers_runs(tmp_path, monkeypatch):
+    """The cache key hashes only the sources a method depends on: editing ``efg/``
+    changes EFG's keys and not FEM's; editing ``soil/`` changes both."""
+    import comparisons.runner as runner
+
+    for folder in ("soil", "efg", "fem_reference"):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "a.py").write_text(f"# {folder}\n")
+    monkeypatch.setattr(runner, "ROOT", tmp_path)
+    efg, fem = Job("soil-column", "efg"), Job("soil-column", "fem-th")
+
+    def keys():
+        runner.code_version.cache_clear()
+        return efg.key(), fem.key()
+
+    first = keys()
+    (tmp_path / "efg" / "a.py").write_text("# efg, edited\n")
+    second = keys()
+    assert second[0] != first[0] and second[1] == first[1]
+    (tmp_path / "soil" / "a.py").write_text("# soil, edited\n")
+    third = keys()
+    assert third[0] != second[0] and third[1] != second[1]
+    runner.code_version.cache_clear()
