@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from comparisons import (figures, footing, footing_consolidation, footing_domain,
-                         footing_pictures, infsup, large_strain, peers, runner, shearband,
-                         stability_figures, stability_report, tables, uniqueness,
-                         verification)
+from comparisons import (essential, figures, footing, footing_consolidation,
+                         footing_domain, footing_pictures, infsup, large_strain, peers,
+                         runner, shearband, stability_figures, stability_report, tables,
+                         uniqueness, verification)
 
 
 def make_report(root="reports"):
@@ -129,6 +129,8 @@ TASKS = [
             "large_strain_profiles", "large strain profiles"),
     _figure("consolidation figure", figures.consolidation, "consolidation",
             "terzaghi histories", "mandel histories"),
+    _table("essential", essential.accuracy, "essential_accuracy"),
+    _table("confined", essential.confined, "essential_confined"),
 ]
 
 
@@ -432,6 +434,7 @@ def markdown(data):
         *shearband.section(data),
         *large_strain.section(data["large strain"], data["large strain small"],
                               data["large strain profile errors"]),
+        *essential.section(data["essential"], data["confined"]),
         *_verdicts(uc, data["bifurcation"].set_index("run"), data["infsup slopes"],
                    data["column stability"], t2, ec, ft,
                    (data["footing"], data["footing curves"])),

@@ -8,10 +8,11 @@ from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from comparisons.cli import main
-from comparisons.essential import _static_bound, confined
+from comparisons.essential import METHODS, _static_bound, confined, section
 from comparisons.metrics import path_error, terzaghi_errors
 from efg import nitsche, statics
 from efg.solver import Model, _discretise, _initial_points, _System, solve
@@ -225,3 +226,27 @@ def test_bad_essential_value_is_one_clear_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert status == 2 and len(err) == 1
     assert "efg.essential = 'lagrange' is unknown: use one of penalty, nitsche" in err[0]
+
+
+def test_the_report_section_bounds_round_off_and_names_where_nitsche_is_worse():
+    """On a table made by hand: Nitsche's round-off patch error is written as the bound,
+    the one row where its error is larger is named, equal rows count as no larger, the
+    unconfined compression is marked branch-dependent and cost rows are not errors."""
+    rows = [("patch-test", "delaunay, vci", "displacement", 1.6e-6, 2.6e-15),
+            ("terzaghi", "built-in", "max_error_load_before_0.01", 0.031, 0.049),
+            ("unconfined-compression", "built-in", "path_error", 0.0046, 0.0046),
+            ("terzaghi", "built-in", "newton_iterations", 273.0, 258.0)]
+    accuracy = pd.DataFrame([(c, s, m, metric, v) for c, s, metric, *values in rows
+                             for m, v in zip(METHODS, values)],
+                            columns=["case", "setting", "method", "metric", "value"])
+    confined = pd.DataFrame({"method": ["penalty", "penalty", "nitsche", "nitsche"],
+                             "stabilisation": ["none", "perturbation"] * 2,
+                             "condition": [7e11, 1e5, 1.5e11, 5e3], "below": [68, 0, 59, 0],
+                             "smallest": [1e-12, 1e-5, 7e-12, 2e-4],
+                             "spread": [0.146, 1e-4, 1e-7, 4e-13]})
+    text = "\n".join(section(accuracy, confined))
+    assert "| patch-test | delaunay, vci | displacement | 1.6e-06 | < 1e-12 |" in text
+    assert "no larger than the penalty's in 2 of 3 error rows; larger in terzaghi " \
+        "(built-in) max_error_load_before_0.01: 0.049 against 0.031." in text
+    assert "| unconfined-compression † |" in text
+    assert "68 (penalty) and 59 (Nitsche)" in text and "perturbation 0 and 0" in text
