@@ -297,7 +297,9 @@ def section(summary):
         "into a weightless normally consolidated Cam-clay layer (Table 1, p'0 = 3 kPa, "
         "undrained, total stress zero at the start), 10 B wide and 10 B deep, to a "
         "settlement of 0.5 B in 100 steps (`soilwater run strip-footing --method "
-        "METHOD`; `fem-th+remesh` is fem-th with `--set fem.remesh=delaunay`), and on "
+        "METHOD`; `efg+nitsche` is EFG with `--set efg.essential=nitsche`, Nitsche's "
+        "essential conditions in place of the paper's penalty; `fem-th+remesh` is fem-th "
+        "with `--set fem.remesh=delaunay`), and on "
         f"the built-in nodes to {DEEP:g} B at the same step. Nodes: equal spacings of B/n within B of the footing, growing to 4 "
         "times that at the far edges; n = " + ", ".join(map(str, DENSITIES))
         + " (the built-in case has 8). Pressures are the mean contact pressure over "
