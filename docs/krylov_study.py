@@ -40,7 +40,9 @@ is forced on every discretisation that suits an iterative solver
 ``python docs/krylov_study.py --newton [nodes] [forcing ...]`` (default 3e3 nodes,
 forcings 1e-2 1e-4; under a minute): the Newton iterations of the bench step on the
 Krylov back-end with each largest forcing (``soil.linear.FORCING_MAX``): the scaled
-residuals and the step's FGMRES iterations, and full Newton on PARDISO
+residuals and the step's FGMRES iterations; then modified Newton on Krylov
+(``soil.krylov.Krylov.current = False``: the step's first tangent kept while it
+contracts the residual tenfold, as PARDISO's factorisation is) and full Newton on PARDISO
 (the current tangent factorised at every iteration) beside them.
 
 ``python docs/krylov_study.py --unstabilised [nodes]`` (default 3e3; under a minute): the
@@ -416,7 +418,7 @@ def symmetric(sizes):
 
 
 class _Traced:
-    """A Newton system that prints its scaled residuals."""
+    """A Newton system that prints its scaled residuals and each tangent it assembles."""
 
     def __init__(self, system):
         self.system, self.layout = system, system.layout
@@ -427,6 +429,7 @@ class _Traced:
         return R, scaled
 
     def tangent(self):
+        print("    tangent assembled", flush=True)
         return self.system.tangent()
 
     def advance(self, dx):
@@ -434,19 +437,22 @@ class _Traced:
 
 
 def newton_iterations(nodes, forcings):
-    """The Newton residuals of one bench step per largest forcing, and full Newton."""
+    """The Newton residuals of one bench step per largest forcing, modified Newton on
+    Krylov, and full Newton on PARDISO."""
     import efg.solver
     import soil.coupling
+    import soil.krylov
     import soil.linear
 
     original = efg.solver.newton, soil.linear.FORCING_MAX, soil.coupling.must_refactorise
 
     def traced(system, stats):
-        before = stats["linear_iterations"]
+        before, tic = stats["linear_iterations"], time.perf_counter()
         try:
             return original[0](_Traced(system), stats)
         finally:
-            print(f"    FGMRES iterations {stats['linear_iterations'] - before}", flush=True)
+            print(f"    FGMRES iterations {stats['linear_iterations'] - before}, Newton "
+                  f"{time.perf_counter() - tic:.1f} s", flush=True)
 
     efg.solver.newton = traced
     try:
@@ -458,13 +464,19 @@ def newton_iterations(nodes, forcings):
                     efg.solver.solve(compression(nodes, krylov=True), progress=False)
                 except ConvergenceError as err:
                     print(f"    failed: {err}", flush=True)
+        soil.linear.FORCING_MAX = soil.coupling.FORCING_MAX = original[1]
+        soil.krylov.Krylov.current = False
+        print(f"{nodes} nodes, krylov, modified Newton:", flush=True)
+        with linear_solver("krylov"):
+            efg.solver.solve(compression(nodes, krylov=True), progress=False)
+        soil.krylov.Krylov.current = True
         soil.coupling.must_refactorise = lambda *args: True
         print(f"{nodes} nodes, pardiso, full Newton:", flush=True)
         with linear_solver("pardiso"):
             efg.solver.solve(compression(nodes, krylov=True), progress=False)
     finally:
         efg.solver.newton, soil.linear.FORCING_MAX, soil.coupling.must_refactorise = original
-        soil.coupling.FORCING_MAX = original[1]
+        soil.coupling.FORCING_MAX, soil.krylov.Krylov.current = original[1], True
 
 
 def unstabilised(nodes):
