@@ -39,7 +39,7 @@ is forced on every discretisation that suits an iterative solver
 
 ``python docs/krylov_study.py --newton [nodes] [forcing ...]`` (default 3e3 nodes,
 forcings 1e-2 1e-4; under a minute): the Newton iterations of the bench step on the
-Krylov back-end with each largest forcing (``soil.linear.FORCING_MAX``): the scaled
+Krylov back-end with each largest forcing (``efg.solver.FORCING``): the scaled
 residuals and the step's FGMRES iterations; then modified Newton on Krylov
 (``soil.krylov.Krylov.current = False``: the step's first tangent kept while it
 contracts the residual tenfold, as PARDISO's factorisation is) and full Newton on PARDISO
@@ -442,9 +442,8 @@ def newton_iterations(nodes, forcings):
     import efg.solver
     import soil.coupling
     import soil.krylov
-    import soil.linear
 
-    original = efg.solver.newton, soil.linear.FORCING_MAX, soil.coupling.must_refactorise
+    original = efg.solver.newton, efg.solver.FORCING, soil.coupling.must_refactorise
 
     def traced(system, stats):
         before, tic = stats["linear_iterations"], time.perf_counter()
@@ -454,29 +453,29 @@ def newton_iterations(nodes, forcings):
             print(f"    FGMRES iterations {stats['linear_iterations'] - before}, Newton "
                   f"{time.perf_counter() - tic:.1f} s", flush=True)
 
+    def run(solver):
+        with linear_solver(solver):
+            try:
+                efg.solver.solve(compression(nodes, krylov=True), progress=False)
+            except ConvergenceError as err:
+                print(f"    failed: {err}", flush=True)
+
     efg.solver.newton = traced
     try:
         for forcing in forcings:
-            soil.linear.FORCING_MAX = soil.coupling.FORCING_MAX = forcing
+            efg.solver.FORCING = forcing
             print(f"{nodes} nodes, krylov, largest forcing {forcing:g}:", flush=True)
-            with linear_solver("krylov"):
-                try:
-                    efg.solver.solve(compression(nodes, krylov=True), progress=False)
-                except ConvergenceError as err:
-                    print(f"    failed: {err}", flush=True)
-        soil.linear.FORCING_MAX = soil.coupling.FORCING_MAX = original[1]
-        soil.krylov.Krylov.current = False
+            run("krylov")
+        efg.solver.FORCING, soil.krylov.Krylov.current = original[1], False
         print(f"{nodes} nodes, krylov, modified Newton:", flush=True)
-        with linear_solver("krylov"):
-            efg.solver.solve(compression(nodes, krylov=True), progress=False)
+        run("krylov")
         soil.krylov.Krylov.current = True
         soil.coupling.must_refactorise = lambda *args: True
         print(f"{nodes} nodes, pardiso, full Newton:", flush=True)
-        with linear_solver("pardiso"):
-            efg.solver.solve(compression(nodes, krylov=True), progress=False)
+        run("pardiso")
     finally:
-        efg.solver.newton, soil.linear.FORCING_MAX, soil.coupling.must_refactorise = original
-        soil.coupling.FORCING_MAX, soil.krylov.Krylov.current = original[1], True
+        efg.solver.newton, efg.solver.FORCING, soil.coupling.must_refactorise = original
+        soil.krylov.Krylov.current = True
 
 
 def unstabilised(nodes):

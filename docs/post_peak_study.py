@@ -13,7 +13,7 @@ current tangent factorised at every iteration, ``soil.linear.CONTRACTION = 0``) 
 Krylov back-end; then with fem-th and fem-p1p1-stab on the same nodes (PARDISO's
 modified Newton). Prints time, Newton and FGMRES iterations, cut-backs and the largest
 q, and every 2 s the spread (largest minus smallest) of q and of p_w over the nodes
-relative to their mean magnitude.
+relative to their mean magnitude (of a run that fails, up to its last level).
 
 ``python docs/post_peak_study.py --tangent [t ...]`` (default 2 8 11.6 14 18.4; about 3
 minutes): the PARDISO run's steps ending at those times, at their start and after one and
@@ -76,19 +76,28 @@ def branches():
 
 def _branch(method, solver, label):
     name = f"{method} on {solver}, {label}"
+    module = efg.solver if method == "efg" else fem_reference.solver
+    snapshots, snapshot = [], module._snapshot
+
+    def kept(*args):                # the levels reached, a failed run's too
+        snapshots.append(snapshot(*args))
+        return snapshots[-1]
+
+    module._snapshot = kept
     with linear_solver(solver):
         tic = time.perf_counter()
         try:
             result = (efg.solver.solve(case(), progress=False) if method == "efg" else
                       fem_reference.solver.solve(case(), method, progress=False))
+            s = result.summary
+            print(f"{name}: {time.perf_counter() - tic:.0f} s, Newton "
+                  f"{s['newton_iterations']}, FGMRES {s['linear_iterations']}, cut-backs "
+                  f"{s['cutbacks']}, largest q {result.history.q.max():.6f} kPa", flush=True)
         except ConvergenceError as err:
             print(f"{name}: failed after {time.perf_counter() - tic:.0f} s: {err}")
-            return
-    s = result.summary
-    print(f"{name}: {time.perf_counter() - tic:.0f} s, Newton "
-          f"{s['newton_iterations']}, FGMRES {s['linear_iterations']}, cut-backs "
-          f"{s['cutbacks']}, largest q {result.history.q.max():.6f} kPa", flush=True)
-    for snap in result.snapshots:
+        finally:
+            module._snapshot = snapshot
+    for snap in snapshots:
         if snap.time > 0 and abs(snap.time / 2 - round(snap.time / 2)) < 1e-9:
             q, p = snap.point_data["q"], snap.point_data["p_w"]
             print(f"  t = {snap.time:4.1f} s: spread of q {np.ptp(q) / np.abs(q).mean():.1e}"

@@ -67,6 +67,13 @@ from soil.case import EDGES
 #: others, weakly at its rim; counting only couplings of at least 1 % makes smaller
 #: aggregates and Schwarz subdomains and fewer FGMRES iterations (README, "Speed").
 STRENGTH = 0.01
+#: Largest forcing of the Krylov back-end's inexact Newton on EFG
+#: (:attr:`soil.linear.Layout.forcing`). The first correction solved to 1e-5 lands where
+#: exact Newton's does and Newton converges quadratically from there: the undrained bench
+#: step takes 4 residuals at 3e3 to 1e5 nodes against 5 at 1e-4 (whose first iterate is
+#: 30 % further off), with fewer FGMRES iterations; 1e-6 as many residuals and more
+#: FGMRES iterations (``python docs/krylov_study.py --newton 3000 1e-2 1e-4 1e-5 1e-6``).
+FORCING = 1e-5
 
 
 @dataclass
@@ -553,7 +560,7 @@ def _layout(nodes, mass, scales, rigid, settings):
                                          np.full(n, scales.volume), plate, pin]),
                   mass=partial(mass, extra=extra),
                   modulus=scales.modulus, smoother="schwarz", strength=STRENGTH,
-                  iterative=iterative, single=iterative)
+                  iterative=iterative, single=iterative, forcing=FORCING)
 
 
 def _roundoff(disc, points, du, du_bar, p, plate, alpha_u, alpha_p, rigid_w):

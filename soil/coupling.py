@@ -205,7 +205,7 @@ def newton(system, stats):
     solver (:meth:`soil.krylov.Krylov.adopt`), which keeps the preconditioner of the
     step's first tangent. Each correction is solved inexactly, to the
     relative residual of :func:`soil.linear.forcing` (Eisenstat-Walker): loosely far from
-    the solution, tightly near it.
+    the solution, tightly near it, and at most the layout's :attr:`~soil.linear.Layout.forcing`.
 
     A correction whose iterate the material or the kinematics cannot take (a return
     mapping that fails, an inverted point) is halved, up to :data:`BACKTRACKS` times
@@ -264,7 +264,8 @@ def newton(system, stats):
     >>> round(float(root.x[0]), 8), stats["factorisations"], bool(residual < TOLERANCE)
     (1.41421356, 2, True)
     """
-    lu, previous, eta, dx = None, np.inf, FORCING_MAX, None
+    cap = FORCING_MAX if system.layout is None else system.layout.forcing
+    lu, previous, eta, dx = None, np.inf, cap, None
     for iteration in range(1, MAX_ITERATIONS + 1):
         R, residual = _residual(system, dx)
         if not np.isfinite(residual):
@@ -286,7 +287,7 @@ def newton(system, stats):
                     lu = factorise(K, system.layout, symmetric=SYMMETRIC_FIRST and first)
                 _count(stats, lu)
             del K                           # the solver holds what it needs
-        eta = forcing(residual, previous, eta, TOLERANCE)
+        eta = forcing(residual, previous, eta, TOLERANCE, cap)
         previous, before = residual, (lu.iterations, lu.factorisations, lu.flops)
         with timed(stats["timings"], "solve_s"):
             dx = lu.solve(-R, rtol=eta)

@@ -58,13 +58,11 @@ from soil.krylov import Krylov
 
 #: A factorisation is kept while each iteration divides the residual by at least 1/this.
 CONTRACTION = 0.1
-#: Largest relative residual an inexact-Newton Krylov solve may stop at. On the undrained
-#: bench step (stabilised Nitsche EFG) the first correction solved to 1e-5 lands where
-#: exact Newton's does, and Newton then converges quadratically: 4 residuals at 3e3 to
-#: 1e5 nodes against 5 at 1e-4 (whose first iterate is 30 % further off), with fewer
-#: FGMRES iterations in all; 1e-6 needs as many residuals and more FGMRES iterations, 1e-2
-#: two more residuals (``python docs/krylov_study.py --newton 3000 1e-2 1e-4 1e-5 1e-6``).
-FORCING_MAX = 1e-5
+#: Largest relative residual an inexact-Newton Krylov solve may stop at, unless the
+#: discretisation asks for another (:attr:`Layout.forcing`; EFG does). On the FEM pairs
+#: 1e-5 takes as many Newton iterations and more FGMRES iterations (``make bench``'s
+#: fem-p1p1-stab step: 127 against 100 at 10^5 nodes, 137 against 108 at 3 x 10^5).
+FORCING_MAX = 1e-4
 #: From this many unknowns the Krylov back-end is the default for a discretisation that
 #: suits it (:attr:`Layout.iterative`): 3 x 10^5 nodes of (ux, uy, p_w), where EFG's
 #: PARDISO factor would need about 20 GB and its step is no faster than Krylov's from
@@ -164,6 +162,10 @@ class Layout:
         measured to pay (``python docs/krylov_study.py --single``; EFG with Nitsche's
         conditions and a stabilisation, fem-th). A penalty's tangent, whose diagonal spans
         10^6, is beyond a single factor's refinement.
+    forcing : float
+        The largest relative residual of an inexact-Newton Krylov solve
+        (:func:`forcing`), ``0 < forcing < 1``: :data:`FORCING_MAX` unless the
+        discretisation asks for another (``python docs/krylov_study.py --newton``).
     """
 
     groups: np.ndarray = None
@@ -176,14 +178,19 @@ class Layout:
     strength: float = 0.0
     iterative: bool = False
     single: bool = False
+    forcing: float = FORCING_MAX
 
     def __post_init__(self):
-        """Reject an unknown :attr:`smoother` or a :attr:`strength` outside [0, 1)."""
+        """Reject an unknown :attr:`smoother`, a :attr:`strength` outside [0, 1) or a
+        :attr:`forcing` outside (0, 1)."""
         if self.smoother not in ("gauss_seidel", "schwarz"):
             raise ValueError(f"Layout.smoother={self.smoother!r}: use 'gauss_seidel' or "
                              "'schwarz'")
         if not 0.0 <= self.strength < 1.0:
             raise ValueError(f"Layout.strength={self.strength!r}: use a threshold in [0, 1)")
+        if not 0.0 < self.forcing < 1.0:
+            raise ValueError(f"Layout.forcing={self.forcing!r}: use a relative residual "
+                             "in (0, 1)")
 
     @property
     def complete(self):
@@ -288,20 +295,22 @@ def must_refactorise(lu, residual, previous):
     return lu is None or residual > CONTRACTION * previous
 
 
-def forcing(residual, previous, last, tolerance):
+def forcing(residual, previous, last, tolerance, cap=FORCING_MAX):
     """The relative residual an inexact-Newton solve stops at (Eisenstat and Walker 1996,
     choice 2 with their safeguard): ``0.9 (r_k / r_k-1)^2``, at least ``0.9 eta_k-1^2``
-    when that exceeds 0.1, at most :data:`FORCING_MAX`, and no less than what takes the
-    scaled residual to a tenth of the Newton ``tolerance``.
+    when that exceeds 0.1, at most ``cap``, and no less than what takes the scaled
+    residual to a tenth of the Newton ``tolerance``.
 
     Parameters
     ----------
     residual, previous : float
         The scaled Newton residual now and at the last iteration (``inf`` at the first).
     last : float
-        The forcing of the last iteration (``FORCING_MAX`` at the first).
+        The forcing of the last iteration (``cap`` at the first).
     tolerance : float
         The Newton tolerance on the scaled residual.
+    cap : float
+        The largest forcing (:attr:`Layout.forcing`).
 
     Examples
     --------
@@ -309,14 +318,14 @@ def forcing(residual, previous, last, tolerance):
     0.9 x (1e-3)^2:
 
     >>> forcing(1.0, float("inf"), FORCING_MAX, 1e-8)
-    1e-05
-    >>> round(forcing(1e-3, 1.0, FORCING_MAX, 1e-10), 12)
+    0.0001
+    >>> round(forcing(1e-3, 1.0, 1e-5, 1e-10, cap=1e-5), 12)
     9e-07
     """
     eta = 0.9 * (residual / previous) ** 2 if np.isfinite(previous) else last
     if 0.9 * last**2 > 0.1:
         eta = max(eta, 0.9 * last**2)
-    return float(min(max(eta, 0.1 * tolerance / residual), FORCING_MAX))
+    return float(min(max(eta, 0.1 * tolerance / residual), cap))
 
 
 def factorise(K, layout=None, symmetric=False):
