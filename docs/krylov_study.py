@@ -38,7 +38,7 @@ is forced on every discretisation that suits an iterative solver
 (``soil.linear.Layout.iterative``), whether it asks for it (``Layout.single``) or not.
 
 ``python docs/krylov_study.py --newton [nodes] [forcing ...]`` (default 3e3 nodes,
-forcings 1e-2 1e-4; under a minute): the Newton iterations of the bench step on the
+forcings 1e-2 1e-4 1e-5 1e-6; under a minute): the Newton iterations of the bench step on the
 Krylov back-end with each largest forcing (``efg.solver.FORCING``): the scaled
 residuals and the step's FGMRES iterations; then modified Newton on Krylov
 (``soil.krylov.Krylov.current = False``: the step's first tangent kept while it
@@ -755,7 +755,7 @@ if __name__ == "__main__":
     elif sys.argv[1:2] == ["--newton"]:
         arguments = [float(a) for a in sys.argv[2:]]
         newton_iterations(int(arguments[0]) if arguments else 3_000,
-                          arguments[1:] or [1e-2, 1e-4])
+                          arguments[1:] or [1e-2, 1e-4, 1e-5, 1e-6])
     elif sys.argv[1:2] == ["--unstabilised"]:
         unstabilised(int(float(sys.argv[2])) if sys.argv[2:] else 3_000)
     elif sys.argv[1:2] == ["--memory"]:

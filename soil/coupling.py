@@ -205,7 +205,8 @@ def newton(system, stats):
     solver (:meth:`soil.krylov.Krylov.adopt`), which keeps the preconditioner of the
     step's first tangent. Each correction is solved inexactly, to the
     relative residual of :func:`soil.linear.forcing` (Eisenstat-Walker): loosely far from
-    the solution, tightly near it, and at most the layout's :attr:`~soil.linear.Layout.forcing`.
+    the solution, tightly near it, and at most the layout's
+    :attr:`~soil.linear.Layout.forcing`.
 
     A correction whose iterate the material or the kinematics cannot take (a return
     mapping that fails, an inverted point) is halved, up to :data:`BACKTRACKS` times
