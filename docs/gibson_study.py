@@ -1,4 +1,4 @@
-"""The measured numbers of the Gibson reference (soil.gibson), README "Gibson's
+"""The measured numbers of the Gibson reference (soilwater.references.gibson), README "Gibson's
 finite-strain reference": python docs/gibson_study.py (about a minute on one core).
 
 Prints the small-strain limit against Terzaghi, the large-strain closed form of Xie and
@@ -11,8 +11,8 @@ import time
 import numpy as np
 from scipy.optimize import brentq
 
-from soil.analytical import terzaghi, xie_leo
-from soil.gibson import (Clay, Column, consolidation_time, initial_coefficients,
+from soilwater.references.closed_forms import terzaghi, xie_leo
+from soilwater.references.gibson import (Clay, Column, consolidation_time, initial_coefficients,
                          large_strain_column, refinement, solve)
 
 GAMMA_W = 9.81

@@ -1,7 +1,7 @@
 """The measured numbers of the Krylov back-end against PARDISO, README "Speed".
 
 ``python docs/krylov_study.py [nodes ...]`` (default 1e4 3e4; about 12 minutes on 2
-cores): one step of ``make bench``'s case (:func:`comparisons.bench.compression` with
+cores): one step of ``make bench``'s case (:func:`soilwater.studies.bench.study.compression` with
 ``krylov=True``: EFG with Nitsche's conditions and the perturbation stabilisation, which
 the Krylov back-end needs) on both back-ends, each in its own forked process, stopped
 after 400 s. Prints the step time, Newton and FGMRES iterations, solve time and peak
@@ -23,7 +23,7 @@ relative to its largest entry.
 ``python docs/krylov_study.py --orderings [nodes ...]`` (default 3e3 1e4; about 3
 minutes): SuperLU's factorisation of the first tangent of the bench step of EFG, fem-th,
 fem-q2q1 and fem-p1p1-stab with scipy's default column ordering (COLAMD) and with
-``soil.linear.SUPERLU_ORDERING``: time and the factor's entries.
+``soilwater.linalg.backends.SUPERLU_ORDERING``: time and the factor's entries.
 
 ``python docs/krylov_study.py --single [nodes ...]`` (default 3e4 1e5; about 20 minutes):
 PARDISO's factorisation of the first tangent of the bench step as the Krylov sizes run it
@@ -35,13 +35,13 @@ memory); then whole runs of the built-in cases (as ``--runs``, and EFG's with th
 perturbation too) with each: Newton iterations, factorisations, cut-backs, and the
 largest difference of p, q and the settlement relative to their range. Single precision
 is forced on every discretisation that suits an iterative solver
-(``soil.linear.Layout.iterative``), whether it asks for it (``Layout.single``) or not.
+(``soilwater.linalg.backends.Layout.iterative``), whether it asks for it (``Layout.single``) or not.
 
 ``python docs/krylov_study.py --newton [nodes] [forcing ...]`` (default 3e3 nodes,
 forcings 1e-2 1e-4 1e-5 1e-6; under a minute): the Newton iterations of the bench step on the
-Krylov back-end with each largest forcing (``efg.solver.FORCING``): the scaled
+Krylov back-end with each largest forcing (``soilwater.efg.solver.FORCING``): the scaled
 residuals and the step's FGMRES iterations; then modified Newton on Krylov
-(``soil.krylov.Krylov.current = False``: the step's first tangent kept while it
+(``soilwater.linalg.krylov.Krylov.current = False``: the step's first tangent kept while it
 contracts the residual tenfold, as PARDISO's factorisation is) and full Newton on PARDISO
 (the current tangent factorised at every iteration) beside them.
 
@@ -56,34 +56,34 @@ built, and after the step.
 
 ``python docs/krylov_study.py --smoother [nodes ...]`` (default 1e4 3e4; about 10
 minutes): one Krylov step of the bench case per method (EFG and the stable FEM pairs)
-with each finest-level AMG smoother (``soil.linear.Layout.smoother``): step and solve
+with each finest-level AMG smoother (``soilwater.linalg.backends.Layout.smoother``): step and solve
 time, Newton and FGMRES iterations. Then whole unconfined-compression runs of fem-th and
 fem-q2q1 (on the grid without centres) with each smoother: time, Newton and FGMRES
 iterations, cut-backs.
 
 ``python docs/krylov_study.py --overlap [nodes] [overlap ...]`` (default 3e4 nodes,
 overlaps 0.25 0.5 1.01; a few minutes): the Schwarz subdomains' growth
-(``soil.krylov.OVERLAP``; above 1 no unknown joins a neighbouring aggregate) against cost,
+(``soilwater.linalg.krylov.OVERLAP``; above 1 no unknown joins a neighbouring aggregate) against cost,
 on the first tangent of the bench step as the Krylov sizes run it: the preconditioner's
 build time and kept inverses [MB], and FGMRES on a random right-hand side to 1e-8:
 iterations and time.
 
 ``python docs/krylov_study.py --strength [theta ...]`` (default 0 0.01 0.02; about 15
 minutes): per strength-of-connection threshold of the AMG hierarchies
-(``soil.linear.Layout.strength``, set for every discretisation alike), one Krylov step
+(``soilwater.linalg.backends.Layout.strength``, set for every discretisation alike), one Krylov step
 of the bench case at 3e4 and 1e5 nodes (step and solve time, Newton and FGMRES
 iterations, peak memory) and whole unconfined-compression runs of fem-th and
 fem-p1p1-stab on Krylov (time, Newton and FGMRES iterations, cut-backs, or the failure).
 
 ``python docs/krylov_study.py --threads [nodes ...]`` (default 1e5; a few minutes): one
 Krylov step of the bench case with ``SOILWATER_THREADS=1`` and with every core
-(:mod:`soil.threads`): step, assembly, solve and constitutive times, Newton and FGMRES
+(:mod:`soilwater.linalg.threads`): step, assembly, solve and constitutive times, Newton and FGMRES
 iterations.
 
 ``python docs/krylov_study.py --schur [nodes ...]`` (default 3e3 1e4; about 5 minutes):
 which block of the Krylov preconditioner limits it. On the first tangent of the bench
 step as the Krylov sizes run it, the displacement-pressure rows scaled and ordered as
-:class:`soil.krylov.Krylov` does, FGMRES (restart 60) to 1e-8 on a random right-hand side,
+:class:`soilwater.linalg.krylov.Krylov` does, FGMRES (restart 60) to 1e-8 on a random right-hand side,
 preconditioned block triangular with the displacement block solved by one AMG V-cycle
 (pyamg's default Gauss-Seidel smoother or the back-end's Schwarz) or exactly (SuperLU),
 and the pressure block by the fixed-stress ``D - s M_p/M`` with the lumped or the
@@ -93,7 +93,7 @@ Schur complement ``D - C A^-1 B``, each exactly or through AMG.
 ``python docs/krylov_study.py --spectral [nodes ...]`` (default 1e5; about a minute): pyamg's
 estimate of the spectral radius of ``D^-1 S`` that weighs its Jacobi prolongation smoother,
 on the displacement block of the bench step's first tangent (scaled and in node blocks as
-:class:`soil.krylov.Krylov` builds it), Arnoldi run by run (15 products each, restarted
+:class:`soilwater.linalg.krylov.Krylov` builds it), Arnoldi run by run (15 products each, restarted
 until the relative error is below 0.01): the restart vector's type, time, estimate and
 error, as pyamg restarts (from the complex Ritz vector) and from its real part.
 
@@ -113,10 +113,10 @@ from functools import partial
 
 import numpy as np
 
-from comparisons.bench import compression, in_child, one_step
-from soil.errors import ConvergenceError
-from soil.linear import linear_solver
-from soil.problems import load_case
+from soilwater.studies.bench.study import compression, in_child, one_step
+from soilwater.errors import ConvergenceError
+from soilwater.linalg.backends import linear_solver
+from soilwater.case.loader import load_case
 
 LIMIT = 400.0
 #: (case, method, efg.essential) of ``--runs``.
@@ -134,9 +134,9 @@ def stabilised(nodes, material="cam-clay", krylov=False):
 
 def steps(sizes):
     """One step per size and back-end."""
-    import comparisons.bench
+    import soilwater.studies.bench.study
 
-    comparisons.bench.compression = stabilised
+    soilwater.studies.bench.study.compression = stabilised
     for nodes in sizes:
         for solver in ("pardiso", "krylov"):
             row, status = in_child(one_step, "efg", nodes, "cam-clay", solver,
@@ -151,8 +151,8 @@ def runs(variants=None, cases=RUNS):
     """Whole runs of ``cases`` (:data:`RUNS`; an optional fourth entry is EFG's
     stabilisation) under each of ``variants`` (name: a function returning a context
     manager; default: on PARDISO and on the Krylov back-end)."""
-    import efg.solver
-    import fem_reference.solver
+    import soilwater.efg.solver
+    import soilwater.fem.solver
 
     variants = variants or {solver: partial(linear_solver, solver)
                             for solver in ("pardiso", "krylov")}
@@ -167,8 +167,8 @@ def runs(variants=None, cases=RUNS):
             with within():
                 tic = time.perf_counter()
                 try:
-                    result = (efg.solver.solve(case, progress=False) if method == "efg"
-                              else fem_reference.solver.solve(case, method, progress=False))
+                    result = (soilwater.efg.solver.solve(case, progress=False) if method == "efg"
+                              else soilwater.fem.solver.solve(case, method, progress=False))
                 except ConvergenceError as err:
                     print(f"{label} {variant}: failed: {err}", flush=True)
                     continue
@@ -192,39 +192,39 @@ SMOOTHED = ("efg", "fem-p1p1-stab", "fem-q2q1", "fem-th")
 
 
 def _laid_out(changes, fn, *args):
-    """``fn(*args)`` with the ``changes`` (:class:`soil.linear.Layout` fields) made to
+    """``fn(*args)`` with the ``changes`` (:class:`soilwater.linalg.backends.Layout` fields) made to
     the layout of every Krylov preconditioner."""
-    import soil.krylov
+    import soilwater.linalg.krylov
 
-    build = soil.krylov.Krylov.__init__
+    build = soilwater.linalg.krylov.Krylov.__init__
 
     def forced(self, K, layout):
         build(self, K, dataclasses.replace(layout, **changes))
 
-    soil.krylov.Krylov.__init__ = forced
+    soilwater.linalg.krylov.Krylov.__init__ = forced
     try:
         return fn(*args)
     finally:
-        soil.krylov.Krylov.__init__ = build
+        soilwater.linalg.krylov.Krylov.__init__ = build
 
 
 def overlaps(nodes, shares):
     """Build and solve time, inverses and iterations of the preconditioner per overlap."""
-    import soil.krylov
-    from soil.krylov import Krylov
+    import soilwater.linalg.krylov
+    from soilwater.linalg.krylov import Krylov
 
     K, layout = first_tangent(nodes, krylov=True)
     b = np.random.default_rng(0).standard_normal(K.shape[0])
-    kept, build = [], soil.krylov._Schwarz.__init__
+    kept, build = [], soilwater.linalg.krylov._Schwarz.__init__
 
     def measured(self, *args):
         build(self, *args)
         kept.append(self.inverses.nbytes)
 
-    soil.krylov._Schwarz.__init__, default = measured, soil.krylov.OVERLAP
+    soilwater.linalg.krylov._Schwarz.__init__, default = measured, soilwater.linalg.krylov.OVERLAP
     try:
         for share in shares:
-            soil.krylov.OVERLAP, kept[:] = share, []
+            soilwater.linalg.krylov.OVERLAP, kept[:] = share, []
             tic = time.perf_counter()
             solver = Krylov(K, layout)
             built = time.perf_counter() - tic
@@ -233,12 +233,12 @@ def overlaps(nodes, shares):
                   f"{sum(kept) / 1e6:.0f} MB, FGMRES {solver.iterations} iterations, "
                   f"{time.perf_counter() - tic - built:.1f} s", flush=True)
     finally:
-        soil.krylov._Schwarz.__init__, soil.krylov.OVERLAP = build, default
+        soilwater.linalg.krylov._Schwarz.__init__, soilwater.linalg.krylov.OVERLAP = build, default
 
 
 def strengths(thetas):
     """Bench steps and whole FEM runs on Krylov per strength threshold."""
-    import fem_reference.solver
+    import soilwater.fem.solver
 
     for theta in thetas:
         for nodes in (30_000, 100_000):
@@ -252,7 +252,7 @@ def strengths(thetas):
             tic = time.perf_counter()
             with linear_solver("krylov"):
                 try:
-                    s = _laid_out({"strength": theta}, fem_reference.solver.solve,
+                    s = _laid_out({"strength": theta}, soilwater.fem.solver.solve,
                                   load_case("unconfined-compression"), method,
                                   False).summary
                 except ConvergenceError as err:
@@ -282,7 +282,7 @@ def smoothers(sizes):
 def whole_runs():
     """Unconfined compression with the quadratic FEM pairs, each smoother (quadrilaterals
     on the case's grid without centres)."""
-    import fem_reference.solver
+    import soilwater.fem.solver
 
     for method, overrides in (("fem-th", []), ("fem-q2q1", ["discretisation.layout=grid"])):
         case = load_case("unconfined-compression", overrides)
@@ -290,7 +290,7 @@ def whole_runs():
             tic = time.perf_counter()
             with linear_solver("krylov"):
                 try:
-                    s = _laid_out({"smoother": smoother}, fem_reference.solver.solve, case,
+                    s = _laid_out({"smoother": smoother}, soilwater.fem.solver.solve, case,
                                   method, False).summary
                     print(f"unconfined-compression {method} {smoother}: "
                           f"{time.perf_counter() - tic:.0f} s, Newton "
@@ -303,15 +303,15 @@ def whole_runs():
 
 @contextmanager
 def _factorising(wrap):
-    """``soil.coupling.factorise`` replaced by ``wrap(original)`` inside the block."""
-    import soil.coupling
+    """``soilwater.nonlinear.coupling.factorise`` replaced by ``wrap(original)`` inside the block."""
+    import soilwater.nonlinear.coupling
 
-    original = soil.coupling.factorise
-    soil.coupling.factorise = wrap(original)
+    original = soilwater.nonlinear.coupling.factorise
+    soilwater.nonlinear.coupling.factorise = wrap(original)
     try:
         yield
     finally:
-        soil.coupling.factorise = original
+        soilwater.nonlinear.coupling.factorise = original
 
 
 class _Captured(Exception):
@@ -320,7 +320,7 @@ class _Captured(Exception):
 
 def threads(sizes):
     """One Krylov step per size on one thread and on every core."""
-    from soil.threads import CORES, using
+    from soilwater.linalg.threads import CORES, using
 
     for nodes in sizes:
         for count in (1, CORES):
@@ -338,8 +338,8 @@ def first_tangent(nodes, krylov=False, method="efg", solver="pardiso"):
     """The first Newton tangent of one bench step (Cam-clay; EFG's ``krylov``: with
     Nitsche's conditions and the perturbation stabilisation) of ``method`` on the
     back-end ``solver``, and its layout."""
-    import efg.solver
-    import fem_reference.solver
+    import soilwater.efg.solver
+    import soilwater.fem.solver
 
     def capture(original):
         def captured(K, layout=None, symmetric=False):
@@ -349,8 +349,8 @@ def first_tangent(nodes, krylov=False, method="efg", solver="pardiso"):
     try:
         with _factorising(capture), linear_solver(solver):
             case = compression(nodes, krylov=krylov)
-            (efg.solver.solve(case, progress=False) if method == "efg"
-             else fem_reference.solver.solve(case, method, progress=False))
+            (soilwater.efg.solver.solve(case, progress=False) if method == "efg"
+             else soilwater.fem.solver.solve(case, method, progress=False))
     except _Captured as captured:
         return captured.args
     raise RuntimeError("the step did not factorise")
@@ -359,11 +359,11 @@ def first_tangent(nodes, krylov=False, method="efg", solver="pardiso"):
 def orderings(sizes, methods=("efg", "fem-th", "fem-q2q1", "fem-p1p1-stab")):
     """SuperLU's factorisation of each method's first bench tangent (Cam-clay; EFG as
     ``make bench`` runs it on a direct solver) with scipy's default column ordering,
-    COLAMD, and with :data:`soil.linear.SUPERLU_ORDERING`: time and fill."""
+    COLAMD, and with :data:`soilwater.linalg.backends.SUPERLU_ORDERING`: time and fill."""
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
 
-    from soil.linear import SUPERLU_ORDERING
+    from soilwater.linalg.backends import SUPERLU_ORDERING
 
     for nodes, method in itertools.product(sizes, methods):
         K = sp.csc_matrix(first_tangent(nodes, method=method, solver="superlu")[0])
@@ -382,7 +382,7 @@ def symmetric(sizes):
     import scipy.sparse.linalg as spla
     from pyamg.krylov import fgmres
 
-    from soil.linear import _Pardiso
+    from soilwater.linalg.backends import _Pardiso
 
     for nodes, nitsche in itertools.product(sizes, (False, True)):
         K, layout = first_tangent(nodes, krylov=nitsche)
@@ -439,11 +439,11 @@ class _Traced:
 def newton_iterations(nodes, forcings):
     """The Newton residuals of one bench step per largest forcing, modified Newton on
     Krylov, and full Newton on PARDISO."""
-    import efg.solver
-    import soil.coupling
-    import soil.krylov
+    import soilwater.efg.solver
+    import soilwater.nonlinear.coupling
+    import soilwater.linalg.krylov
 
-    original = efg.solver.newton, efg.solver.FORCING, soil.coupling.must_refactorise
+    original = soilwater.efg.solver.newton, soilwater.efg.solver.FORCING, soilwater.nonlinear.coupling.must_refactorise
 
     def traced(system, stats):
         before, tic = stats["linear_iterations"], time.perf_counter()
@@ -456,38 +456,38 @@ def newton_iterations(nodes, forcings):
     def run(solver):
         with linear_solver(solver):
             try:
-                efg.solver.solve(compression(nodes, krylov=True), progress=False)
+                soilwater.efg.solver.solve(compression(nodes, krylov=True), progress=False)
             except ConvergenceError as err:
                 print(f"    failed: {err}", flush=True)
 
-    efg.solver.newton = traced
+    soilwater.efg.solver.newton = traced
     try:
         for forcing in forcings:
-            efg.solver.FORCING = forcing
+            soilwater.efg.solver.FORCING = forcing
             print(f"{nodes} nodes, krylov, largest forcing {forcing:g}:", flush=True)
             run("krylov")
-        efg.solver.FORCING, soil.krylov.Krylov.current = original[1], False
+        soilwater.efg.solver.FORCING, soilwater.linalg.krylov.Krylov.current = original[1], False
         print(f"{nodes} nodes, krylov, modified Newton:", flush=True)
         run("krylov")
-        soil.krylov.Krylov.current = True
-        soil.coupling.must_refactorise = lambda *args: True
+        soilwater.linalg.krylov.Krylov.current = True
+        soilwater.nonlinear.coupling.must_refactorise = lambda *args: True
         print(f"{nodes} nodes, pardiso, full Newton:", flush=True)
         run("pardiso")
     finally:
-        efg.solver.newton, efg.solver.FORCING, soil.coupling.must_refactorise = original
-        soil.krylov.Krylov.current = True
+        soilwater.efg.solver.newton, soilwater.efg.solver.FORCING, soilwater.nonlinear.coupling.must_refactorise = original
+        soilwater.linalg.krylov.Krylov.current = True
 
 
 def unstabilised(nodes):
     """The bench step on the Krylov back-end without and with EFG's stabilisation."""
-    import efg.solver
+    import soilwater.efg.solver
 
     for kind in ("none", "perturbation"):
         case = compression(nodes, krylov=True)
         case = dataclasses.replace(case, efg=dataclasses.replace(case.efg, stabilisation=kind))
         with linear_solver("krylov"):
             try:
-                s = efg.solver.solve(case, progress=False).summary
+                s = soilwater.efg.solver.solve(case, progress=False).summary
                 print(f"{nodes} nodes, stabilisation {kind}: Newton {s['newton_iterations']}, "
                       f"FGMRES {s['linear_iterations']}, cut-backs {s['cutbacks']}", flush=True)
             except ConvergenceError as err:
@@ -548,7 +548,7 @@ def faults(sizes):
 
 def memory(nodes):
     """Resident and peak memory around the first preconditioner of a Krylov step."""
-    import efg.solver
+    import soilwater.efg.solver
 
     def watch(original):
         def watched(K, layout=None, symmetric=False):
@@ -562,17 +562,17 @@ def memory(nodes):
     print(f"{len(case.nodes())} nodes, krylov:", flush=True)
     _memory("before the step")
     with _factorising(watch), linear_solver("krylov"):
-        efg.solver.solve(case, progress=False)
+        soilwater.efg.solver.solve(case, progress=False)
     _memory("after the step")
 
 
 @contextmanager
 def _precision(single):
     """PARDISO inside the block, factorising the tangent of every discretisation that
-    suits an iterative solver (:attr:`soil.linear.Layout.iterative`) in single precision
-    (whether its :attr:`soil.linear.Layout.single` asks for it or not), or every tangent
+    suits an iterative solver (:attr:`soilwater.linalg.backends.Layout.iterative`) in single precision
+    (whether its :attr:`soilwater.linalg.backends.Layout.single` asks for it or not), or every tangent
     in double."""
-    import soil.linear
+    import soilwater.linalg.backends
 
     def wrap(original):
         def factorised(K, layout=None, symmetric=False):
@@ -581,20 +581,20 @@ def _precision(single):
             return original(K, layout, symmetric)
         return factorised
 
-    kept, soil.linear.SINGLE = soil.linear.SINGLE, True
+    kept, soilwater.linalg.backends.SINGLE = soilwater.linalg.backends.SINGLE, True
     try:
         with _factorising(wrap), linear_solver("pardiso"):
             yield
     finally:
-        soil.linear.SINGLE = kept
+        soilwater.linalg.backends.SINGLE = kept
 
 
 def _single_step(method, nodes, single):
     """One bench step (:func:`stabilised`) of ``method`` on PARDISO, in single precision
     or double."""
-    import comparisons.bench
+    import soilwater.studies.bench.study
 
-    comparisons.bench.compression = stabilised
+    soilwater.studies.bench.study.compression = stabilised
     with _precision(single):
         return one_step(method, nodes, "cam-clay", "pardiso")
 
@@ -606,7 +606,7 @@ def single(sizes):
     perturbation) with each."""
     import scipy.sparse as sp
 
-    from soil.linear import _Pardiso
+    from soilwater.linalg.backends import _Pardiso
 
     for nodes in sizes:
         K, layout = first_tangent(nodes, krylov=True)
@@ -650,7 +650,7 @@ def scaled_tangent(K, precondition, count):
     ``precondition``, rows scaled as it scales them."""
     import scipy.sparse as sp
 
-    from soil.krylov import _permuted
+    from soilwater.linalg.krylov import _permuted
 
     permuted = _permuted(sp.csr_matrix(K), precondition.order)
     return sp.csr_matrix(sp.diags(precondition.row) @ permuted)[:count, :count]
@@ -662,7 +662,7 @@ def spectral(sizes):
     from pyamg.util.linalg import _approximate_eigenvalues
     from pyamg.util.utils import get_diagonal, scale_rows
 
-    from soil.krylov import Krylov
+    from soilwater.linalg.krylov import Krylov
 
     for nodes in sizes:
         K, layout = first_tangent(nodes, krylov=True)
@@ -696,7 +696,7 @@ def schur(sizes):
     import scipy.sparse.linalg as spla
     from pyamg.krylov import fgmres
 
-    from soil.krylov import RESTART, Krylov, _amg, _rigid_modes
+    from soilwater.linalg.krylov import RESTART, Krylov, _amg, _rigid_modes
 
     for nodes in sizes:
         K, layout = first_tangent(nodes, krylov=True)

@@ -9,7 +9,7 @@ far a run has left that solution.
 
 ``python docs/post_peak_study.py --branches`` (about 18 minutes on 2 cores): the case
 with EFG three ways: PARDISO's modified Newton (the default), full Newton on PARDISO (the
-current tangent factorised at every iteration, ``soil.linear.CONTRACTION = 0``) and the
+current tangent factorised at every iteration, ``soilwater.linalg.backends.CONTRACTION = 0``) and the
 Krylov back-end; then with fem-th and fem-p1p1-stab on the same nodes (PARDISO's
 modified Newton). Prints time, Newton and FGMRES iterations, cut-backs and the largest
 q, and every 2 s the spread (largest minus smallest) of q and of p_w over the nodes
@@ -21,7 +21,7 @@ two exact Newton corrections. Central differences of the residual, ``(R(x + h v)
 h v)) / 2h`` for h = 1e-3, 1e-4, 1e-5, against ``K v``: the relative error in the
 displacement and the pressure rows, along the Newton correction and along random
 displacement and pressure directions (scaled as the step's first correction). On the
-tangent's displacement block, scaled as :class:`soil.krylov.Krylov` scales it: its
+tangent's displacement block, scaled as :class:`soilwater.linalg.krylov.Krylov` scales it: its
 negative eigenvalues, and FGMRES iterations to 1e-8 on ``-R`` with the tangent's own
 preconditioner, with the preconditioner of the step's first tangent (what the Krylov
 back-end keeps through a step), and with the displacement block solved exactly.
@@ -34,14 +34,14 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-import efg.solver
-import fem_reference.solver
-import soil.linear
-from soil.coupling import TIMERS
-from soil.errors import ConvergenceError
-from soil.krylov import MAX_ITERATIONS, Krylov
-from soil.linear import linear_solver
-from soil.problems import load_case
+import soilwater.efg.solver
+import soilwater.fem.solver
+import soilwater.linalg.backends
+from soilwater.nonlinear.coupling import TIMERS
+from soilwater.errors import ConvergenceError
+from soilwater.linalg.krylov import MAX_ITERATIONS, Krylov
+from soilwater.linalg.backends import linear_solver
+from soilwater.case.loader import load_case
 
 from krylov_study import scaled_tangent   # docs/, this script's folder
 
@@ -55,28 +55,28 @@ def case():
     return load_case("unconfined-compression", GRID)
 
 
-#: The runs of ``--branches``: method, linear solver, label, ``soil.linear.CONTRACTION``.
-PATHS = (("efg", "pardiso", "modified Newton", soil.linear.CONTRACTION),
+#: The runs of ``--branches``: method, linear solver, label, ``soilwater.linalg.backends.CONTRACTION``.
+PATHS = (("efg", "pardiso", "modified Newton", soilwater.linalg.backends.CONTRACTION),
          ("efg", "pardiso", "full Newton", 0.0),
-         ("efg", "krylov", "Newton", soil.linear.CONTRACTION),
-         ("fem-th", "pardiso", "modified Newton", soil.linear.CONTRACTION),
-         ("fem-p1p1-stab", "pardiso", "modified Newton", soil.linear.CONTRACTION))
+         ("efg", "krylov", "Newton", soilwater.linalg.backends.CONTRACTION),
+         ("fem-th", "pardiso", "modified Newton", soilwater.linalg.backends.CONTRACTION),
+         ("fem-p1p1-stab", "pardiso", "modified Newton", soilwater.linalg.backends.CONTRACTION))
 
 
 def branches():
     """The case on the paths of :data:`PATHS`."""
-    kept = soil.linear.CONTRACTION
+    kept = soilwater.linalg.backends.CONTRACTION
     for method, solver, label, contraction in PATHS:
-        soil.linear.CONTRACTION = contraction
+        soilwater.linalg.backends.CONTRACTION = contraction
         try:
             _branch(method, solver, label)
         finally:
-            soil.linear.CONTRACTION = kept
+            soilwater.linalg.backends.CONTRACTION = kept
 
 
 def _branch(method, solver, label):
     name = f"{method} on {solver}, {label}"
-    module = efg.solver if method == "efg" else fem_reference.solver
+    module = soilwater.efg.solver if method == "efg" else soilwater.fem.solver
     snapshots, snapshot = [], module._snapshot
 
     def kept(*args):                # the levels reached, a failed run's too
@@ -87,8 +87,8 @@ def _branch(method, solver, label):
     with linear_solver(solver):
         tic = time.perf_counter()
         try:
-            result = (efg.solver.solve(case(), progress=False) if method == "efg" else
-                      fem_reference.solver.solve(case(), method, progress=False))
+            result = (soilwater.efg.solver.solve(case(), progress=False) if method == "efg" else
+                      soilwater.fem.solver.solve(case(), method, progress=False))
             s = result.summary
             print(f"{name}: {time.perf_counter() - tic:.0f} s, Newton "
                   f"{s['newton_iterations']}, FGMRES {s['linear_iterations']}, cut-backs "
@@ -111,7 +111,7 @@ class _Reached(Exception):
 def _steps(times):
     """``(model, points, t0, t1)`` at the start of the PARDISO run's steps that end at
     ``times``."""
-    taken, step = [], efg.solver._step
+    taken, step = [], soilwater.efg.solver._step
 
     def capture(model, points, t0, t1, stats):
         if any(abs(t1 - t) < 1e-9 for t in times):
@@ -120,14 +120,14 @@ def _steps(times):
                 raise _Reached
         return step(model, points, t0, t1, stats)
 
-    efg.solver._step = capture
+    soilwater.efg.solver._step = capture
     try:
         with linear_solver("pardiso"):
-            efg.solver.solve(case(), progress=False)
+            soilwater.efg.solver.solve(case(), progress=False)
     except _Reached:
         pass
     finally:
-        efg.solver._step = step
+        soilwater.efg.solver._step = step
     return taken
 
 
@@ -136,10 +136,10 @@ def tangent(times):
     rng = np.random.default_rng(0)
     for model, points, t0, t1 in _steps(times):
         timings = dict.fromkeys(TIMERS, 0.0)
-        disc = efg.solver._discretise(model, points.nodes,
+        disc = soilwater.efg.solver._discretise(model, points.nodes,
                                       np.vstack([points.nodes, points.probes]), timings,
                                       points.cells)
-        system = efg.solver._System(model, points, disc, t0, t1, timings)
+        system = soilwater.efg.solver._System(model, points, disc, t0, t1, timings)
         first, scale = None, None
         for iterate in range(3):
             R, residual = system.residual()

@@ -33,12 +33,12 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from comparisons.metrics import axis_profile, oscillation_index, overshoot, path_error
-from comparisons.runner import solver
-from comparisons.verification import stability_number
-from soil.driver import closed_form_q, run_test
-from soil.materials import load_material
-from soil.problems import load_case
+from soilwater.studies.harness.metrics import axis_profile, oscillation_index, overshoot, path_error
+from soilwater.studies.harness.runner import solver
+from soilwater.studies.verification.study import stability_number
+from soilwater.material.driver import closed_form_q, run_test
+from soilwater.material.presets import load_material
+from soilwater.case.loader import load_case
 
 OUT = Path(tempfile.mkdtemp(prefix="soilwater-tutorial-"))
 print(f"figures go to {OUT}")
@@ -54,7 +54,7 @@ print(f"figures go to {OUT}")
 # path in closed form, q / (M p') = ln(p'0/p') / Lambda with Lambda = (lambda - kappa) /
 # lambda, which ends at the critical state p'_f = p'0 exp(-Lambda), q_f = M p'_f.
 #
-# `soil.driver.run_test` integrates the rate equations of the material with an adaptive
+# `soilwater.material.driver.run_test` integrates the rate equations of the material with an adaptive
 # Runge-Kutta method and no return mapping: it is the paper's "theoretical solution"
 # and the reference for everything below. First we check it against the closed form.
 
@@ -81,7 +81,7 @@ print(f"at eps_a = 0.2: p'/p'0 = {driver.p.iloc[-1] / clay.p0:.4f}, "
 # strain. The exact solution is a uniform deformation, so every point follows the
 # driver path above. Two measures tell how far a solver strays from it:
 #
-# * the **path error** (`comparisons.metrics.path_error`): the largest distance of the
+# * the **path error** (`soilwater.studies.harness.metrics.path_error`): the largest distance of the
 #   run's mean (p', q) from the driver at equal axial strain, over p'0;
 # * **ERR** (paper eq. 1): the mean over the material points of
 #   |(D22 - D22^I) / D22|, how far the points' vertical stretching D22^I is from the
@@ -94,7 +94,7 @@ print(f"at eps_a = 0.2: p'/p'0 = {driver.p.iloc[-1] / clay.p0:.4f}, "
 # the variationally consistent correction this project adds (`vci`, the default), which
 # restores the discrete divergence theorem on any cells. Taylor-Hood FEM (`fem-th`, P2/P1
 # triangles on the same nodes) is the reference. We take 50 steps instead of the
-# case's 100 to stay within a minute (the sweep runner, `comparisons.runner.run`, runs
+# case's 100 to stay within a minute (the sweep runner, `soilwater.studies.harness.runner.run`, runs
 # such sets in parallel with a cache; here the solvers are called one after the other).
 
 # %%

@@ -1,27 +1,27 @@
-"""The numpy return mapping of Cam-clay that :meth:`soil.camclay.CamClay.update` replaced:
+"""The numpy return mapping of Cam-clay that :meth:`soilwater.material.camclay.CamClay.update` replaced:
 the test oracle of its numba kernel.
 
 It is the package's former vectorised ``CamClay.update``, kept verbatim as a function of
-a :class:`~soil.camclay.CamClay` (``update(clay, ...)``): a Newton iteration over all points
+a :class:`~soilwater.material.camclay.CamClay` (``update(clay, ...)``): a Newton iteration over all points
 at once in (ln p', q, ln p'c, dgamma), the vertex re-solve of the original model, the
 consistent tangent. It keeps its own copies of the yield function, the hardening law and
 the mean specific volume, so that it checks the package's numba scalar functions too; from
 the clay it takes only parameters and ``moduli``.
 
-Conventions as in :mod:`soil.camclay`: stress tension positive ``(xx, yy, zz, xy)``, strain
+Conventions as in :mod:`soilwater.material.camclay`: stress tension positive ``(xx, yy, zz, xy)``, strain
 Voigt ``(xx, yy, zz, 2xy)``, p', q, p'c compression positive.
 """
 
 import numpy as np
 
-from soil.errors import ConvergenceError
-from soil.kinematics import (DEVIATORIC, IDENTITY, deviator, double_dot, hughes_winget,
+from soilwater.errors import ConvergenceError
+from soilwater.material.kinematics import (DEVIATORIC, IDENTITY, deviator, double_dot, hughes_winget,
                              invariants)
 
 
 def update(clay, stress, state, dstrain, dspin, tol=1e-11, max_iter=60):
     """Integrate one step on every point: the same arguments and returns as
-    :meth:`soil.camclay.CamClay.update` (after ``clay``)."""
+    :meth:`soilwater.material.camclay.CamClay.update` (after ``clay``)."""
     stress = hughes_winget(stress, dspin)
     dstrain = np.asarray(dstrain, dtype=float)
     p_n, _ = invariants(stress)

@@ -13,7 +13,7 @@ vertex), then times ``CamClay.update`` (numba kernel) and ``camclay_oracle.updat
 interleaved, best of ``--repeat``, in one process, so that the ratio is what counts on a
 shared machine (wall-clock and CPU time). It also times the numpy part of ``update``
 (rotation, elastic trial) and the kernel alone, on one thread and on the pool of
-:mod:`soil.threads` (checking that both give the same arrays), and reports the largest
+:mod:`soilwater.linalg.threads` (checking that both give the same arrays), and reports the largest
 differences of kernel and oracle: stress over the start-of-step p', tangent over its
 Frobenius norm, p'c relative.
 
@@ -45,10 +45,10 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 
 import camclay_oracle as oracle  # noqa: E402
-from soil import camclay  # noqa: E402
-from soil.camclay import CamClay  # noqa: E402
-from soil.threads import threads, using  # noqa: E402
-from soil.kinematics import (DEVIATORIC, deviator, double_dot, hughes_winget,  # noqa: E402
+from soilwater.material import camclay  # noqa: E402
+from soilwater.material.camclay import CamClay  # noqa: E402
+from soilwater.linalg.threads import threads, using  # noqa: E402
+from soilwater.material.kinematics import (DEVIATORIC, deviator, double_dot, hughes_winget,  # noqa: E402
                              invariants)
 
 
@@ -58,7 +58,7 @@ def table1(model):
 
 
 def one_thread(fn, *args):
-    """``fn(*args)`` on one thread (:func:`soil.threads.using`)."""
+    """``fn(*args)`` on one thread (:func:`soilwater.linalg.threads.using`)."""
     with using(1):
         return fn(*args)
 
@@ -133,7 +133,7 @@ def compare(model, n, repeat, seed):
 FIRST_CALL = """
 import time; start, start_cpu = time.perf_counter(), time.process_time()
 import numpy as np
-from soil.camclay import CamClay
+from soilwater.material.camclay import CamClay
 clay = CamClay(lam=0.11, kappa=0.04, M=1.42, nu=0.333, e0=0.83, p0=3.0)
 imported, imported_cpu = time.perf_counter(), time.process_time()
 stress, state = clay.initial_state(10)

@@ -2,8 +2,8 @@
 
 import pytest
 
-from comparisons.peers import PEER_DATA
-from soil.camclay import CamClay
+from soilwater.studies.harness.paths import PEER_DATA
+from soilwater.material.camclay import CamClay
 
 
 @pytest.fixture

@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from comparisons import bench
+from soilwater.studies.bench import study as bench
 
 ROOT = Path(__file__).parents[1]
 
@@ -50,7 +50,7 @@ def test_in_child_stops_a_child_that_hangs():
 
 @pytest.mark.parametrize("sizes", ["1000,abc", "1000,", "1e3,2.5e3,0.5", "50", "nan", "1e400"])
 def test_bad_sizes_are_one_line_and_write_nothing(tmp_path, sizes):
-    proc = subprocess.run([sys.executable, "-m", "comparisons.cli", "bench", "--sizes", sizes,
+    proc = subprocess.run([sys.executable, "-m", "soilwater.cli", "bench", "--sizes", sizes,
                            "--out", str(tmp_path / "bench.md")], cwd=ROOT,
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2
@@ -66,7 +66,7 @@ def test_sizes_accept_exponents():
 def test_numpy_blas_names_the_openblas_variables_it_was_loaded_with():
     env = {**os.environ, "OPENBLAS_CORETYPE": "Prescott"}
     env.pop("OPENBLAS_L2_SIZE", None)
-    code = "from comparisons import bench; print(bench.numpy_blas())"
+    code = "from soilwater.studies.bench import study as bench; print(bench.numpy_blas())"
     line = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, check=True,
                           capture_output=True, text=True, timeout=120).stdout
     assert "OPENBLAS_CORETYPE Prescott, OPENBLAS_L2_SIZE unset" in line

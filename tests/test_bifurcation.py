@@ -6,13 +6,13 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from comparisons.uniqueness import continuum_onset
-from efg.solver import solve as efg_solve
-from fem_reference.solver import solve as fem_solve
-from soil.bifurcation import DENSE_LIMIT, ellipticity, onset, restricted_eigenvalue
-from soil.errors import InputError
-from soil.problems import load_case
-from soil.validation import case_from_dict
+from soilwater.studies.uniqueness.study import continuum_onset
+from soilwater.efg.solver import solve as efg_solve
+from soilwater.fem.solver import solve as fem_solve
+from soilwater.diagnostics.bifurcation import DENSE_LIMIT, ellipticity, onset, restricted_eigenvalue
+from soilwater.errors import InputError
+from soilwater.case.loader import load_case
+from soilwater.case.validation import case_from_dict
 
 
 def test_restricted_eigenvalue_matches_an_independent_null_space():

@@ -6,10 +6,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from conftest import table1
-from soil.driver import run_test
-from soil.errors import InputError
-from soil.kinematics import invariants, rotate, rotate_strain
-from soil.materials import material_from_spec
+from soilwater.material.driver import run_test
+from soilwater.errors import InputError
+from soilwater.material.kinematics import invariants, rotate, rotate_strain
+from soilwater.material.presets import material_from_spec
 
 MODELS = [("original", 1.0), ("modified", 1.0), ("modified", 2.0)]
 

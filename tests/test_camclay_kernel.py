@@ -25,11 +25,11 @@ from hypothesis import strategies as st
 
 import camclay_oracle as oracle
 from conftest import table1
-from soil import camclay
-from soil.camclay import CamClay
-from soil.coupling import material_update
-from soil.errors import ConvergenceError
-from soil.kinematics import DEVIATORIC, deviator, double_dot, hughes_winget, invariants
+from soilwater.material import camclay
+from soilwater.material.camclay import CamClay
+from soilwater.nonlinear.coupling import material_update
+from soilwater.errors import ConvergenceError
+from soilwater.material.kinematics import DEVIATORIC, deviator, double_dot, hughes_winget, invariants
 
 STRESS_TOL = 2e-10    # of p' at the start of the step
 TANGENT_TOL = 2e-8    # of the tangent's Frobenius norm
@@ -110,7 +110,7 @@ def test_a_start_in_tension_is_refused():
 
 
 def test_a_solver_names_the_kind_of_point_that_failed():
-    """:func:`soil.coupling.material_update` adds what a point is (a node, a background
+    """:func:`soilwater.nonlinear.coupling.material_update` adds what a point is (a node, a background
     cell, a boundary point) to the material's message."""
     clay = table1()
     stress, state = clay.initial_state(3)

@@ -4,8 +4,8 @@ import shutil
 
 import pandas as pd
 
-from comparisons.check import REFERENCE, check
-from comparisons.cli import main
+from soilwater.studies.check import REFERENCE, check
+from soilwater.cli import main
 
 
 def test_check_passes_on_main(capsys):
@@ -30,7 +30,7 @@ def test_a_reference_altered_by_1e_3_fails_with_a_readable_diff(tmp_path):
 def test_past_the_onset_only_bounds_apply_and_before_it_everything_is_compared():
     """On the committed unconfined table: a 0.5 % change of fem-th's q fails on every row
     before its departure and on none after it; past the onset ERR need only be >= 0."""
-    from comparisons.check import TABLES, compare
+    from soilwater.studies.check import TABLES, compare
 
     _, rtol, atol, branch = TABLES["unconfined_err"]
     ref = pd.read_csv(REFERENCE / "unconfined_err.csv")

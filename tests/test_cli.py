@@ -11,7 +11,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from comparisons.cli import Interrupted, main
+from soilwater.cli import Interrupted, main
 
 
 def test_path_writes_the_documented_columns(tmp_path):
@@ -44,7 +44,7 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, args, word):
                                         "M = 1.2\nnu = 0.3\ne0 = 1.0\np0 = 100.0\n")
     out = tmp_path / "out.csv"
     base = ["path", "--test", "isotropic", "--strain", "0.1", "--out", str(out)]
-    cmd = [sys.executable, "-m", "comparisons.cli"] + base + args  # the last flag wins
+    cmd = [sys.executable, "-m", "soilwater.cli"] + base + args  # the last flag wins
     proc = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
@@ -53,7 +53,7 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, args, word):
 
 
 def test_list_names_every_builtin_case_with_a_description(capsys):
-    from soil.problems import builtin_cases
+    from soilwater.case.loader import builtin_cases
 
     assert main(["list"]) == 0
     lines = capsys.readouterr().out.strip().splitlines()
@@ -76,9 +76,9 @@ def test_show_applies_overrides(capsys):
 ])
 def test_bad_case_input_is_one_line(tmp_path, args, word):
     (tmp_path / "case.toml").write_text(
-        (Path(__file__).parents[1] / "cases" / "terzaghi.toml").read_text()
+        (Path(__file__).parents[1] / "src" / "soilwater" / "case" / "builtin" / "terzaghi.toml").read_text()
         .replace("end = 10.0", "end = 10.0\nviscosity = 1e-3"))
-    proc = subprocess.run([sys.executable, "-m", "comparisons.cli"] + args, cwd=tmp_path,
+    proc = subprocess.run([sys.executable, "-m", "soilwater.cli"] + args, cwd=tmp_path,
                           capture_output=True, text=True)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
@@ -87,7 +87,7 @@ def test_bad_case_input_is_one_line(tmp_path, args, word):
 
 def _cli(args, cwd, **kwargs):
     """Run ``soilwater ARGS`` in a real process."""
-    return subprocess.run([sys.executable, "-m", "comparisons.cli", *args], cwd=cwd,
+    return subprocess.run([sys.executable, "-m", "soilwater.cli", *args], cwd=cwd,
                           capture_output=True, text=True, **kwargs)
 
 
@@ -112,7 +112,7 @@ def test_run_into_the_current_folder_is_refused_and_touches_nothing(tmp_path):
 def refusing(tmp_path, monkeypatch):
     """A home folder, a working folder holding notes.txt, a data folder and a link to
     the working folder's parent; the solvers fail the test if they are ever called."""
-    from comparisons.runner import METHODS
+    from soilwater.studies.harness.runner import METHODS
 
     home, work, data = tmp_path / "home", tmp_path / "a" / "work", tmp_path / "data"
     for folder in (home, work, data):
@@ -147,7 +147,7 @@ def test_run_refuses_folders_it_did_not_write_before_solving(refusing, capsys, o
 
 
 def test_a_second_run_replaces_the_first_result(tmp_path, monkeypatch):
-    from soil.results import MARKER
+    from soilwater.results import MARKER
 
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "run"
@@ -174,7 +174,7 @@ def test_a_signal_swallowed_by_a_library_is_still_one_line(tmp_path, monkeypatch
     still the interruption's one line and status, no traceback."""
     import os
 
-    import comparisons.runner as runner
+    import soilwater.studies.harness.runner as runner
 
     def library(case, progress=True):
         try:
@@ -194,7 +194,7 @@ def test_a_signal_swallowed_by_a_library_is_still_one_line(tmp_path, monkeypatch
 
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="needs Linux /proc")
 def test_sigterm_during_a_run_is_one_line_and_leaves_nothing(tmp_path):
-    cmd = [sys.executable, "-m", "comparisons.cli", "run", "unconfined-compression",
+    cmd = [sys.executable, "-m", "soilwater.cli", "run", "unconfined-compression",
            "--method", "efg", "--out", "run", "--set", "time.steps=400"]  # ~30 s
     proc = subprocess.Popen(cmd, cwd=tmp_path, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 30
@@ -210,7 +210,7 @@ def test_sigterm_during_a_run_is_one_line_and_leaves_nothing(tmp_path):
 
 
 def test_stdout_closed_early_is_silent(tmp_path):
-    cmd = [sys.executable, "-m", "comparisons.cli", "show", "soil-column"]
+    cmd = [sys.executable, "-m", "soilwater.cli", "show", "soil-column"]
     proc = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
     proc.stdout.close()  # before soilwater writes: every write meets a closed pipe

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from dask.distributed import LocalCluster
 
-from comparisons.runner import Job, run, table
+from soilwater.studies.harness.runner import Job, run, table
 
 JOBS = [Job("soil-column", "efg", ("time.end=100.0", f"efg.weight_p={w}"),
             labels=(("weights", w),)) for w in ("quartic", "exp:0.25")]

@@ -1,4 +1,4 @@
-"""The shear-strain measure of the pictures (:mod:`comparisons.deformation`) against
+"""The shear-strain measure of the pictures (:mod:`soilwater.studies.harness.deformation`) against
 closed forms: simple shear of amount gamma gives eps_s = (2 / sqrt(3)) asinh(gamma / 2),
 pure shear with stretch lambda (2 / sqrt(3)) |ln lambda|, an in-plane dilation s
 (2 / 3) |ln s| (plane strain keeps e_zz = 0 in the deviator), a rigid rotation 0; the
@@ -8,9 +8,9 @@ triangles and FEM cells of either orientation, triangles or quadrilaterals."""
 import numpy as np
 import pytest
 
-from comparisons.deformation import (deformation_gradient, nodal, shear_strain,
+from soilwater.studies.harness.deformation import (deformation_gradient, nodal, shear_strain,
                                      snapshot_strain, triangulation)
-from soil.results import Snapshot
+from soilwater.results import Snapshot
 
 GAMMAS = np.array([0.01, 0.3, 1.0, 3.0])
 

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from conftest import table1
-from soil.driver import TESTS, closed_form_q, run_test
-from soil.errors import InputError
+from soilwater.material.driver import TESTS, closed_form_q, run_test
+from soilwater.errors import InputError
 
 
 @pytest.mark.parametrize("model,ocr", [("original", 1.0), ("modified", 1.0), ("modified", 2.0)])
@@ -68,10 +68,10 @@ def test_unknown_test_is_refused():
 @pytest.mark.parametrize("model,ocr", [("original", 1.0), ("modified", 1.0), ("modified", 2.0)])
 def test_plane_strain_undrained_strength_is_the_closed_form(model, ocr):
     """At 50 % strain the largest in-plane shear stress (sigma_1 - sigma_3)/2 of isochoric
-    plane strain is ``M p'_f / sqrt(3)`` (soil.analytical.undrained_strength): the
+    plane strain is ``M p'_f / sqrt(3)`` (soilwater.references.closed_forms.undrained_strength): the
     out-of-plane stress has become the in-plane mean."""
-    from soil.analytical import undrained_strength
-    from soil.driver import _integrated
+    from soilwater.references.closed_forms import undrained_strength
+    from soilwater.material.driver import _integrated
 
     clay = table1(model, ocr)
     raw, _ = _integrated(clay, "undrained-plane-strain", 0.5, 200)

@@ -11,14 +11,15 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from comparisons.cli import main
-from comparisons.essential import METHODS, _static_bound, confined, section
-from comparisons.metrics import path_error, terzaghi_errors
-from efg import nitsche, statics
-from efg.solver import Model, _discretise, _initial_points, _System, solve
-from soil.coupling import TIMERS, new_counts, newton
-from soil.problems import load_case
-from soil.weakform import Coefficients
+from soilwater.cli import main
+from soilwater.studies.essential.study import METHODS, _static_bound, confined, section
+from soilwater.studies.harness.metrics import path_error, terzaghi_errors
+from soilwater.efg import nitsche
+from soilwater.efg import statics
+from soilwater.efg.solver import Model, _discretise, _initial_points, _System, solve
+from soilwater.nonlinear.coupling import TIMERS, new_counts, newton
+from soilwater.case.loader import load_case
+from soilwater.physics.weakform import Coefficients
 
 NITSCHE = "efg.essential=nitsche"
 
@@ -79,7 +80,7 @@ def test_simple_shear_with_nitsche_follows_the_driver():
     flux on the constrained boundary, not an extra load (counted twice, the shear
     strain ended at 0.29996 and the path error at 0.0115; measured now 0.0069, as the
     penalty's). With the pressure stabilisation: without it the undrained confined
-    tangent is near singular with either method (``comparisons.essential.confined``)
+    tangent is near singular with either method (``soilwater.studies.essential.study.confined``)
     and Nitsche's path depends on the linear solver."""
     result = solve(load_case("simple-shear", ["time.steps=50", NITSCHE,
                                               "efg.stabilisation=perturbation"]),

@@ -3,12 +3,12 @@
 import numpy as np
 import pytest
 
-from comparisons.cli import main
-from comparisons.metrics import (axis_profile, mandel_errors, oscillation_index, path_error,
+from soilwater.cli import main
+from soilwater.studies.harness.metrics import (axis_profile, mandel_errors, oscillation_index, path_error,
                                  terzaghi_errors)
-from efg.solver import solve
-from soil.problems import load_case
-from soil.results import MARKER
+from soilwater.efg.solver import solve
+from soilwater.case.loader import load_case
+from soilwater.results import MARKER
 
 
 @pytest.fixture(scope="module")

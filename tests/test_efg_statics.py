@@ -5,12 +5,12 @@ import itertools
 import numpy as np
 import scipy.sparse as sp
 
-from comparisons.cli import main
-from comparisons.verification import cantilever_convergence, patch_test
-from efg.assembly import Pattern, elasticity_coefficients, scatter
-from efg.mls import ShapeFunctions
-from soil.analytical import plane_strain_stiffness
-from soil.weakform import Coefficients
+from soilwater.cli import main
+from soilwater.studies.verification.study import cantilever_convergence, patch_test
+from soilwater.efg.assembly import Pattern, elasticity_coefficients, scatter
+from soilwater.efg.mls import ShapeFunctions
+from soilwater.references.closed_forms import plane_strain_stiffness
+from soilwater.physics.weakform import Coefficients
 
 
 def test_scatter_equals_sparse_products():

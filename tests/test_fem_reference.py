@@ -8,16 +8,16 @@ import pytest
 import scipy.sparse as sp
 from skfem import BilinearForm, CellBasis, ElementTriP1, ElementTriP2, MeshTri
 
-from comparisons.cli import main
-from comparisons.metrics import moose_errors, overshoot, path_error
-from comparisons.peers import moose_terzaghi
-from comparisons.verification import column_ratios
-from fem_reference.assembly import Shapes, block
-from fem_reference.solver import solve
-from soil.analytical import mandel, terzaghi, undrained_pressure
-from soil.errors import InputError
-from soil.problems import load_case
-from soil.weakform import Coefficients
+from soilwater.cli import main
+from soilwater.studies.harness.metrics import moose_errors, overshoot, path_error
+from soilwater.studies.peers.study import moose_terzaghi
+from soilwater.studies.verification.study import column_ratios
+from soilwater.fem.assembly import Shapes, block
+from soilwater.fem.solver import solve
+from soilwater.references.closed_forms import mandel, terzaghi, undrained_pressure
+from soilwater.errors import InputError
+from soilwater.case.loader import load_case
+from soilwater.physics.weakform import Coefficients
 
 LOAD = 1e-3  # the built-in Terzaghi load (MOOSE: 1)
 HEIGHTS = np.arange(10.0)

@@ -13,11 +13,11 @@ import json
 import numpy as np
 import pytest
 
-from efg.solver import solve as efg_solve
-from fem_reference.solver import solve as fem_solve
-from soil.errors import InputError
-from soil.problems import load_case
-from soil.validation import case_from_dict
+from soilwater.efg.solver import solve as efg_solve
+from soilwater.fem.solver import solve as fem_solve
+from soilwater.errors import InputError
+from soilwater.case.loader import load_case
+from soilwater.case.validation import case_from_dict
 
 METHODS = ("efg", "fem-th", "fem-p1p1")
 
@@ -226,7 +226,7 @@ def test_a_run_that_fails_can_stop_at_its_last_converged_level():
     0.2, 2 and 4 m (levels 1, 10, 100, 200 s at 0.02 m/s) fails before 4 m (measured:
     in the step to 2 m); the result keeps every level before the failure and says why.
     With the default ``error`` the same run raises."""
-    from soil.errors import ConvergenceError
+    from soilwater.errors import ConvergenceError
 
     base = ["geometry.width=5", "geometry.height=5", "discretisation.nx=6",
             "discretisation.ny=6", "boundary.top.footing.to=1.0",
@@ -250,8 +250,8 @@ def test_taylor_hood_time_step_error_at_a_tenth_of_the_width_is_small():
     (measured 0.20 %; 0.92 of Prandtl's pressure). EFG's moves by 11 % on the same
     nodes and steps (1.04, 0.98, 0.87 of Prandtl's in 5, 10, 20 steps; `make report`
     measures it on the built-in nodes): that is a finding of the report, not asserted."""
-    from comparisons.footing import width
-    from comparisons.footing_grids import refined
+    from soilwater.studies.footing.study import width
+    from soilwater.studies.footing.grids import refined
 
     p = []
     for steps in (10, 20):
@@ -269,8 +269,8 @@ def test_undrained_elastic_footing_settles_as_flamant_per_doubling(method):
     ``(1 - nu_u) ln 2 / (pi G)`` per doubling, nu_u = 1/2 (measured for fem-th 1.0 % and
     0.3 % below it, fem-p1p1-stab 3.2 % and 1.5 %; with the drained nu = 0.333 it would be
     33 % larger)."""
-    from comparisons.footing_grids import growing
-    from soil.analytical import flamant_settlement, undrained_poisson
+    from soilwater.studies.footing.grids import growing
+    from soilwater.references.closed_forms import flamant_settlement, undrained_poisson
 
     compliance = []
     for domain in (5.0, 10.0, 20.0):

@@ -1,4 +1,4 @@
-"""The strip-footing pictures (:mod:`comparisons.footing_pictures`) from a tiny real run:
+"""The strip-footing pictures (:mod:`soilwater.studies.footing.pictures`) from a tiny real run:
 the report's tasks write PNGs that open and one GIF per method with one frame per
 snapshot (or every k-th), the section names what they wrote, the distortion count rates
 the undeformed mesh clean and a mesh with a node pushed through its neighbours inverted,
@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from comparisons import footing_pictures as pictures
-from efg.solver import solve as efg_solve
-from fem_reference.solver import solve as fem_solve
-from soil.problems import load_case
+from soilwater.studies.footing import pictures
+from soilwater.efg.solver import solve as efg_solve
+from soilwater.fem.solver import solve as fem_solve
+from soilwater.case.loader import load_case
 
 #: 6 x 6 nodes, 10 steps to a settlement of 0.1 B.
 TINY = ("discretisation.x=[[1.0, 2], [10.0, 3, 3.0]]",
@@ -31,7 +31,7 @@ def test_tasks_write_pngs_gifs_and_a_section_naming_them(tiny, tmp_path):
     """The report's tasks after the runs (given here): a table, two PNGs that open, one
     GIF per method with all 11 snapshots as frames; nothing else in the folders."""
     data = {pictures.RUNS: tiny}
-    for sub in ("tables", "figures"):      # as comparisons.report.make_report
+    for sub in ("tables", "figures"):      # as soilwater.studies.report.make_report
         (tmp_path / sub).mkdir()
     written = []
     for _, task in pictures.TASKS[1:]:

@@ -1,15 +1,16 @@
-"""The strip-footing study's tables and verdict (:mod:`comparisons.footing`,
-:mod:`comparisons.footing_domain`, :mod:`comparisons.footing_grids`) on curves made by
+"""The strip-footing study's tables and verdict (:mod:`soilwater.studies.footing.study`,
+:mod:`soilwater.studies.footing.domain`, :mod:`soilwater.studies.footing.grids`) on curves made by
 hand, where every number is known; the runs themselves are `make report`'s."""
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from comparisons import footing, footing_domain
-from comparisons.footing_grids import growing, refined
-from soil.analytical import PRANDTL, undrained_strength
-from soil.problems import load_case
+from soilwater.studies.footing import study as footing
+from soilwater.studies.footing import domain as footing_domain
+from soilwater.studies.footing.grids import growing, refined
+from soilwater.references.closed_forms import PRANDTL, undrained_strength
+from soilwater.case.loader import load_case
 
 S = np.linspace(0.005, 0.5, 100)
 

@@ -1,4 +1,4 @@
-"""Gibson's finite-strain 1-D consolidation reference (soil.gibson): equilibrium, the
+"""Gibson's finite-strain 1-D consolidation reference (soilwater.references.gibson): equilibrium, the
 small-strain limit (Terzaghi), the large-strain closed form (Xie and Leo 2004), the static
 end states, its tangent and its convergence."""
 
@@ -9,9 +9,9 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from soil.analytical import terzaghi, xie_leo
-from soil.errors import InputError
-from soil.gibson import (SOFT_CLAY, Clay, Column, _Discrete, consolidation_time,
+from soilwater.references.closed_forms import terzaghi, xie_leo
+from soilwater.errors import InputError
+from soilwater.references.gibson import (SOFT_CLAY, Clay, Column, _Discrete, consolidation_time,
                          large_strain_column, refinement, solve)
 
 GAMMA_W = 9.81

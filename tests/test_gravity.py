@@ -1,20 +1,20 @@
-"""Gravity, the geostatic start and void-ratio-dependent permeability (soil.geostatic),
+"""Gravity, the geostatic start and void-ratio-dependent permeability (soilwater.physics.geostatic),
 in both solvers, against closed forms and Gibson's finite-strain reference."""
 
 import meshio
 import numpy as np
 import pytest
 
-from efg.solver import solve as efg_solve
-from fem_reference.solver import solve as fem_solve
-from soil import gibson
-from soil.analytical import self_weight_settlement
-from soil.camclay import CamClay
-from soil.errors import InputError
-from soil.geostatic import buoyant_weight, initial_state
-from soil.problems import load_case
-from soil.schema import apply_override
-from soil.validation import case_from_dict
+from soilwater.efg.solver import solve as efg_solve
+from soilwater.fem.solver import solve as fem_solve
+from soilwater.references import gibson
+from soilwater.references.closed_forms import self_weight_settlement
+from soilwater.material.camclay import CamClay
+from soilwater.errors import InputError
+from soilwater.physics.geostatic import buoyant_weight, initial_state
+from soilwater.case.loader import load_case
+from soilwater.case.schema import apply_override
+from soilwater.case.validation import case_from_dict
 
 def _layer(*overrides):
     """The large-strain column's 10 m layer made linear elastic (E = 1e4 kPa, nu = 0.3,
@@ -131,7 +131,7 @@ def test_geostatic_camclay_layer_stays_put_with_taylor_hood():
 def test_weightless_layer_loaded_by_gravity_settles_to_the_static_solution(method, rtol):
     """Started weightless (uniform, zero stress), the weight acts from t = 0+: the
     excess pore pressure drains and the top settles to the finite-strain closed form
-    (:func:`soil.analytical.self_weight_settlement`; measured 2.3e-6 for fem-th,
+    (:func:`soilwater.references.closed_forms.self_weight_settlement`; measured 2.3e-6 for fem-th,
     1.0e-4 for EFG). The small-strain value is 0.2 % larger."""
     case = _layer("time.end=1e6", "time.dt0=100.0", "time.growth=1.5", "time.dt_max=2e5")
     history = _solve(case, method).history
@@ -143,7 +143,7 @@ def test_weightless_layer_loaded_by_gravity_settles_to_the_static_solution(metho
 @pytest.mark.parametrize("method", ["fem-th", "efg"])
 def test_large_strain_column_ends_at_gibsons_settlement(method, tmp_path):
     """The built-in large-strain column, in 30 coarse steps: the final settlement (23 %
-    of the height) within 1 % of Gibson's (soil.gibson, converged to 1e-4); the VTU
+    of the height) within 1 % of Gibson's (soilwater.references.gibson, converged to 1e-4); the VTU
     fields carry Taylor's k of each node's void ratio."""
     case = load_case("large-strain-column", overrides=["time.growth=1.6"])
     result = _solve(case, method)

@@ -8,11 +8,11 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from comparisons.cli import main
-from comparisons.infsup import RCOND, SAMPLES, measure, slopes, square
-from efg.boundary import boundary_points, segment_edges
-from efg.mls import ShapeFunctions
-from soil.infsup import inf_sup
+from soilwater.cli import main
+from soilwater.diagnostics.pairs import RCOND, SAMPLES, measure, slopes, square
+from soilwater.efg.boundary import boundary_points, segment_edges
+from soilwater.efg.mls import ShapeFunctions
+from soilwater.diagnostics.infsup import inf_sup
 
 SIZES = (3, 5, 9, 17)
 

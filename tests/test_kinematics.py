@@ -4,7 +4,7 @@ import numpy as np
 from hypothesis import given, strategies as st
 from hypothesis.extra.numpy import arrays
 
-from soil.kinematics import determinant, inverse
+from soilwater.material.kinematics import determinant, inverse
 
 entries = st.floats(-1e3, 1e3, allow_nan=False, allow_infinity=False)
 

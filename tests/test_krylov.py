@@ -1,4 +1,4 @@
-"""The iterative back-end (soil.krylov, ``SOILWATER_LINEAR_SOLVER=krylov``): its solves
+"""The iterative back-end (soilwater.linalg.krylov, ``SOILWATER_LINEAR_SOLVER=krylov``): its solves
 reach the tolerance they are asked for, and a run through it converges to the direct
 solver's history to the Newton tolerance."""
 
@@ -6,15 +6,15 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-import efg.solver
-import fem_reference.solver
-from comparisons.bench import compression
-from soil.errors import InputError
-from soil.krylov import _amg, _Schwarz, _subdomains
-import soil.coupling
-import soil.linear
-from soil.linear import Layout, backend, factorise, linear_solver
-from soil.problems import load_case
+import soilwater.efg.solver
+import soilwater.fem.solver
+from soilwater.studies.bench.study import compression
+from soilwater.errors import InputError
+from soilwater.linalg.krylov import _amg, _Schwarz, _subdomains
+import soilwater.nonlinear.coupling
+import soilwater.linalg.backends
+from soilwater.linalg.backends import Layout, backend, factorise, linear_solver
+from soilwater.case.loader import load_case
 
 pytest.importorskip("pyamg")
 
@@ -143,17 +143,17 @@ def test_schwarz_solves_side_by_side_only_subdomains_that_do_not_touch(monkeypat
     the pool of threads gives exactly the sweep of one thread."""
     import pyamg
 
-    import soil.krylov
+    import soilwater.linalg.krylov
 
     K, layout = biot(n=20)
     A = sp.csr_matrix(K[:800, :800])
     ml = pyamg.smoothed_aggregation_solver(sp.bsr_matrix(A, blocksize=(2, 2)),
                                            max_coarse=10, keep=True)
-    monkeypatch.setattr(soil.krylov, "SPLIT_FROM", 0)          # split even this small one
-    monkeypatch.setattr(soil.krylov, "SIDE_BY_SIDE_FROM", 0)
+    monkeypatch.setattr(soilwater.linalg.krylov, "SPLIT_FROM", 0)          # split even this small one
+    monkeypatch.setattr(soilwater.linalg.krylov, "SIDE_BY_SIDE_FROM", 0)
     smoother = _Schwarz(A, *_subdomains(ml.levels[0].C, ml.levels[0].AggOp, 2))
     sub, ptr = smoother.subdomain, smoother.pointer
-    assert len(smoother.runs) > 1 and len(smoother.runs[0]) == soil.krylov.GROUPS
+    assert len(smoother.runs) > 1 and len(smoother.runs[0]) == soilwater.linalg.krylov.GROUPS
     for ranges in smoother.runs:
         rows = [sub[ptr[lo]:ptr[hi]] for lo, hi in ranges]
         reads = [set(A[r].indices) | set(r) for r in rows]
@@ -163,7 +163,7 @@ def test_schwarz_solves_side_by_side_only_subdomains_that_do_not_touch(monkeypat
     together, alone = np.zeros(800), np.zeros(800)
     smoother.forward(A, together, b)
     smoother.backward(A, together, b)
-    monkeypatch.setattr(soil.krylov, "run", lambda kernel, ranges: [kernel(*r) for r in ranges])
+    monkeypatch.setattr(soilwater.linalg.krylov, "run", lambda kernel, ranges: [kernel(*r) for r in ranges])
     smoother.forward(A, alone, b)
     smoother.backward(A, alone, b)
     assert np.array_equal(together, alone)
@@ -191,20 +191,20 @@ def test_efg_corrections_take_few_iterations():
     default Gauss-Seidel smoother and the lumped pressure mass a correction took about
     200 (837 FGMRES iterations in 5 residuals at 10^4 nodes)."""
     with linear_solver("krylov"):
-        result = efg.solver.solve(compression(1000, "cam-clay", krylov=True), progress=False)
+        result = soilwater.efg.solver.solve(compression(1000, "cam-clay", krylov=True), progress=False)
     s = result.summary
     assert 0 < s["linear_iterations"] <= 20 * s["newton_iterations"]
 
 
 def test_the_forcing_cap_keeps_inexact_newton_on_exact_newtons_path(monkeypatch):
     """On the undrained bench step (stabilised Nitsche EFG, Cam-clay, 3 x 10^3 nodes)
-    the first correction, solved to EFG's forcing cap (``efg.solver.FORCING``), lands
+    the first correction, solved to EFG's forcing cap (``soilwater.efg.solver.FORCING``), lands
     where the exact one does (scaled residual within 1 %; measured 0.1 %), and inexact
     Newton through FGMRES then takes as many residuals as full Newton with exact solves
     (4; its last two are 50 and 20 times from the tolerance). Capped at 1e-4 instead,
     the first iterate is 30 % further off (and Newton needs one residual more)."""
     def residuals(solver, setting=()):
-        seen, residual = [], soil.coupling._residual
+        seen, residual = [], soilwater.nonlinear.coupling._residual
 
         def traced(system, dx):
             R, scaled = residual(system, dx)
@@ -212,16 +212,16 @@ def test_the_forcing_cap_keeps_inexact_newton_on_exact_newtons_path(monkeypatch)
             return R, scaled
 
         with monkeypatch.context() as m, linear_solver(solver):
-            m.setattr(soil.coupling, "_residual", traced)
+            m.setattr(soilwater.nonlinear.coupling, "_residual", traced)
             for module, name, value in setting:
                 m.setattr(module, name, value)
-            efg.solver.solve(compression(3000, "cam-clay", krylov=True), progress=False)
+            soilwater.efg.solver.solve(compression(3000, "cam-clay", krylov=True), progress=False)
         return seen
 
-    exact = residuals("superlu", setting=[(soil.coupling, "must_refactorise",
+    exact = residuals("superlu", setting=[(soilwater.nonlinear.coupling, "must_refactorise",
                                            lambda *args: True)])
     inexact = residuals("krylov")
-    loose = residuals("krylov", setting=[(efg.solver, "FORCING", 1e-4)])
+    loose = residuals("krylov", setting=[(soilwater.efg.solver, "FORCING", 1e-4)])
     assert len(inexact) == len(exact)
     assert inexact[1] == pytest.approx(exact[1], rel=0.01)
     assert loose[1] > 1.2 * exact[1]
@@ -246,8 +246,8 @@ def runs(case, method):
     """The run of ``method`` with SuperLU and with the Krylov back-end."""
     def solve():
         if method == "efg":
-            return efg.solver.solve(case, progress=False)
-        return fem_reference.solver.solve(case, method, progress=False)
+            return soilwater.efg.solver.solve(case, progress=False)
+        return soilwater.fem.solver.solve(case, method, progress=False)
 
     with linear_solver("superlu"):
         direct = solve()
@@ -298,19 +298,19 @@ def test_krylov_is_the_default_on_large_systems_that_suit_it(monkeypatch, method
                                                 "time.end=0.2", "time.steps=1", *overrides])
 
     def solver_of_a_run():
-        result = (efg.solver.solve(case, progress=False) if method == "efg"
-                  else fem_reference.solver.solve(case, method, progress=False))
+        result = (soilwater.efg.solver.solve(case, progress=False) if method == "efg"
+                  else soilwater.fem.solver.solve(case, method, progress=False))
         return result.summary["linear_solver"].split()[0]
 
-    monkeypatch.setattr(soil.linear, "KRYLOV_FROM", 50)
+    monkeypatch.setattr(soilwater.linalg.backends, "KRYLOV_FROM", 50)
     assert solver_of_a_run() == ("krylov" if iterative else direct)
-    monkeypatch.setattr(soil.linear, "KRYLOV_FROM", 10**6)
+    monkeypatch.setattr(soilwater.linalg.backends, "KRYLOV_FROM", 10**6)
     assert solver_of_a_run() == direct
 
 
 def test_backend_switches_at_krylov_from_and_the_environment_overrides_it(monkeypatch):
     monkeypatch.delenv("SOILWATER_LINEAR_SOLVER", raising=False)
-    direct, size = backend(), soil.linear.KRYLOV_FROM
+    direct, size = backend(), soilwater.linalg.backends.KRYLOV_FROM
     assert direct != "krylov"
     assert backend(size - 1, iterative=True) == direct
     assert backend(size, iterative=True) == "krylov"

@@ -1,14 +1,14 @@
-"""The finite-strain consolidation study (comparisons/large_strain.py): its reference
+"""The finite-strain consolidation study (soilwater/studies/large_strain/study.py): its reference
 column is the case's, and its summary measures what it says."""
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from comparisons import large_strain
-from soil import gibson
-from soil.geostatic import initial_state
-from soil.problems import load_case
+from soilwater.studies.large_strain import study as large_strain
+from soilwater.references import gibson
+from soilwater.physics.geostatic import initial_state
+from soilwater.case.loader import load_case
 
 
 def test_reference_column_starts_where_the_case_starts():

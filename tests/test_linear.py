@@ -1,4 +1,4 @@
-"""The linear solver of both coupled solvers (soil.linear): back-ends and reuse."""
+"""The linear solver of both coupled solvers (soilwater.linalg.backends): back-ends and reuse."""
 
 import importlib.util
 
@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-import efg.solver
-import fem_reference.solver
-import soil.coupling
-import soil.linear
-from soil.coupling import TIMERS, new_counts, newton
-from soil.errors import ConvergenceError, InputError
-from soil.linear import Layout, backend, factorise
-from soil.problems import load_case
+import soilwater.efg.solver
+import soilwater.fem.solver
+import soilwater.nonlinear.coupling
+import soilwater.linalg.backends
+from soilwater.nonlinear.coupling import TIMERS, new_counts, newton
+from soilwater.errors import ConvergenceError, InputError
+from soilwater.linalg.backends import Layout, backend, factorise
+from soilwater.case.loader import load_case
 
 PARDISO = importlib.util.find_spec("pypardiso") is not None
 
@@ -80,7 +80,7 @@ def test_superlu_factorises_K_when_asked_for_sym_K(monkeypatch):
 
 
 class Linear:
-    """Newton system ``R(x) = K x - b`` (:func:`soil.coupling.newton`)."""
+    """Newton system ``R(x) = K x - b`` (:func:`soilwater.nonlinear.coupling.newton`)."""
 
     def __init__(self, K, groups, b):
         self.K, self.layout, self.b, self.x = K, Layout(groups=groups), b, np.zeros(len(b))
@@ -104,7 +104,7 @@ def test_newton_falls_back_to_K_when_sym_K_stalls(monkeypatch, name, skew):
     if name == "pardiso" and not PARDISO:
         pytest.skip("pypardiso is not installed (extra soilwater[fast])")
     monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", name)
-    monkeypatch.setattr(soil.coupling, "SYMMETRIC_FIRST", True)
+    monkeypatch.setattr(soilwater.nonlinear.coupling, "SYMMETRIC_FIRST", True)
     system = Linear(*unsymmetric_saddle(skew))
     stats = {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
     newton(system, stats)
@@ -135,7 +135,7 @@ class Fenced:
 def test_newton_halves_a_correction_the_material_cannot_take(monkeypatch, backtracks,
                                                              converges):
     monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "superlu")
-    monkeypatch.setattr(soil.coupling, "BACKTRACKS", backtracks)
+    monkeypatch.setattr(soilwater.nonlinear.coupling, "BACKTRACKS", backtracks)
     system, stats = Fenced(), {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
     if not converges:
         with pytest.raises(ConvergenceError, match="return mapping"):
@@ -168,8 +168,8 @@ def compression(material=None, steps=4):
     return case
 
 
-@pytest.mark.parametrize("solve", [efg.solver.solve,
-                                   lambda c, progress: fem_reference.solver.solve(
+@pytest.mark.parametrize("solve", [soilwater.efg.solver.solve,
+                                   lambda c, progress: soilwater.fem.solver.solve(
                                        c, "fem-p1p1", progress=progress)])
 def test_elastic_steps_reuse_one_factorisation(monkeypatch, solve):
     """Modified Newton: a linear elastic skeleton needs one factorisation per step."""
@@ -188,8 +188,8 @@ def test_pardiso_and_superlu_give_the_same_steps(monkeypatch, symmetric_first):
     runs = {}
     for name in ("superlu", "pardiso"):
         monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", name)
-        monkeypatch.setattr(soil.coupling, "SYMMETRIC_FIRST", symmetric_first)
-        result = efg.solver.solve(compression(), progress=False)
+        monkeypatch.setattr(soilwater.nonlinear.coupling, "SYMMETRIC_FIRST", symmetric_first)
+        result = soilwater.efg.solver.solve(compression(), progress=False)
         runs[name] = result.history
     symmetric = result.summary["symmetric_factorisations"]
     if symmetric_first:
@@ -226,7 +226,7 @@ def test_single_precision_factor_refines_to_the_residual_asked_for(monkeypatch,
         x = lu.solve(b, rtol=rtol)
         assert lu.single
         assert (np.linalg.norm((K @ x - b) / scales)
-                <= soil.linear.REFINED * np.linalg.norm(b / scales))
+                <= soilwater.linalg.backends.REFINED * np.linalg.norm(b / scales))
     assert lu.factorisations == 1
     assert not factorise(K, Layout(groups=groups, scales=scales)).single   # a penalty's
 
@@ -260,9 +260,9 @@ def test_single_precision_takes_the_steps_of_double(monkeypatch, method):
                                                 'efg.stabilisation="perturbation"'])
     runs = {}
     for single in (False, True):
-        monkeypatch.setattr(soil.linear, "SINGLE", single)
-        result = (efg.solver.solve(case, progress=False) if method == "efg"
-                  else fem_reference.solver.solve(case, method, progress=False))
+        monkeypatch.setattr(soilwater.linalg.backends, "SINGLE", single)
+        result = (soilwater.efg.solver.solve(case, progress=False) if method == "efg"
+                  else soilwater.fem.solver.solve(case, method, progress=False))
         runs[single] = result
     assert runs[True].summary["single_factorisations"] > 0
     assert runs[False].summary["single_factorisations"] == 0

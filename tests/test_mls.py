@@ -7,11 +7,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from efg.mls import RCOND_MIN, ShapeFunctions, neighbours, support_radii
-from efg.weights import evaluate
-from soil.settings import Weight
-from soil.errors import InputError
-from soil.problems import load_case
+from soilwater.efg.mls import RCOND_MIN, ShapeFunctions, neighbours, support_radii
+from soilwater.efg.weights import evaluate
+from soilwater.efg.settings import Weight
+from soilwater.errors import InputError
+from soilwater.case.loader import load_case
 
 WEIGHTS = ("quartic", "cubic", "exp:0.5", "exp:0.25")
 

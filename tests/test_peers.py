@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from comparisons.peers import geos_oedometer, mfront_triaxial, relative_difference, summary
+from soilwater.studies.peers.study import geos_oedometer, mfront_triaxial, relative_difference, summary
 
 
 def test_geos_oedometer_load_unload_reload(peer):

@@ -8,24 +8,24 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from efg.boundary import boundary_points, segment_edges
-from efg.mls import ShapeFunctions
-from efg.quadrature import background
-from soil.camclay import CamClay
-from soil.elastic import LinearElastic
-from soil.errors import InputError
-from soil.case import EDGES
-from soil.problems import builtin_cases, load_case
-from soil.schema import MAX_TRIANGLE_ORDER, SCALES
-from soil.settings import DEFAULT_SCALE, Weight
-from soil.validation import case_from_dict
+from soilwater.efg.boundary import boundary_points, segment_edges
+from soilwater.efg.mls import ShapeFunctions
+from soilwater.efg.quadrature import background
+from soilwater.material.camclay import CamClay
+from soilwater.material.elastic import LinearElastic
+from soilwater.errors import InputError
+from soilwater.case.model import EDGES
+from soilwater.case.loader import builtin_cases, load_case
+from soilwater.case.schema import MAX_TRIANGLE_ORDER, SCALES
+from soilwater.efg.settings import DEFAULT_SCALE, Weight
+from soilwater.case.validation import case_from_dict
 
-CASES = Path(__file__).resolve().parents[1] / "cases"
+CASES = Path(__file__).resolve().parents[1] / "src" / "soilwater" / "case" / "builtin"
 BUILTIN = builtin_cases()
 
 
 def test_builtins_are_the_case_files_by_name():
-    assert Path(str(files("cases"))).resolve() == CASES
+    assert Path(str(files("soilwater.case") / "builtin")).resolve() == CASES
     assert list(BUILTIN) == sorted(p.stem for p in CASES.glob("*.toml")) == [
         "cantilever", "large-strain-column", "mandel", "patch-test", "rough-compression",
         "self-weight-consolidation", "simple-shear", "soil-column", "strip-footing",
@@ -334,7 +334,7 @@ def test_weights_are_parsed_at_load_and_written_by_their_canonical_names():
                                   "exp:abc", "exp:inf", "exp:nan", "exp:1e-4", "exp:1001",
                                   "quartic:2"])
 def test_cases_accept_exactly_the_weights_of_the_solver(name):
-    """One grammar: load-time validation and efg.weights accept the same names."""
+    """One grammar: load-time validation and soilwater.efg.weights accept the same names."""
     def accepted(check):
         try:
             check()

@@ -5,9 +5,9 @@ import pytest
 from matplotlib.path import Path
 from scipy.spatial import Delaunay
 
-from efg.quadrature import delaunay_cells, square_cells
-from soil.errors import InputError
-from soil.problems import load_case
+from soilwater.efg.quadrature import delaunay_cells, square_cells
+from soilwater.errors import InputError
+from soilwater.case.loader import load_case
 
 W, H = 3.0, 4.0  # the unconfined-compression specimen [m]
 

@@ -1,14 +1,14 @@
-"""Cell quality in the histories (issue 15, item 4): soil.quality.cell_quality against
+"""Cell quality in the histories (issue 15, item 4): soilwater.geometry.quality.cell_quality against
 hand values, the undeformed grid's cells in both solvers, the fem-th mesh distorting
 under the strip footing, and EFG's support-coverage check."""
 
 import numpy as np
 import pytest
 
-from efg.solver import solve as efg_solve
-from fem_reference.solver import solve as fem_solve
-from soil.problems import load_case
-from soil.quality import cell_quality
+from soilwater.efg.solver import solve as efg_solve
+from soilwater.fem.solver import solve as fem_solve
+from soilwater.case.loader import load_case
+from soilwater.geometry.quality import cell_quality
 
 S3 = np.sqrt(3)
 

@@ -12,17 +12,17 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from fem_reference.assembly import Shapes
-from fem_reference.solver import Model, Topology, _initial_state, _remesh
-from fem_reference.solver import solve as fem_solve
-from fem_reference.spaces import Space, cell_bases
-from fem_reference.transfer import project, transfer
-from soil.coupling import TIMERS
-from soil.errors import ConvergenceError, InputError
-from soil.kinematics import invariants
-from soil.problems import load_case
-from soil.triangulation import delaunay_triangles
-from soil.validation import case_from_dict
+from soilwater.fem.assembly import Shapes
+from soilwater.fem.solver import Model, Topology, _initial_state, _remesh
+from soilwater.fem.solver import solve as fem_solve
+from soilwater.fem.spaces import Space, cell_bases
+from soilwater.fem.transfer import project, transfer
+from soilwater.nonlinear.coupling import TIMERS
+from soilwater.errors import ConvergenceError, InputError
+from soilwater.material.kinematics import invariants
+from soilwater.case.loader import load_case
+from soilwater.geometry.triangulation import delaunay_triangles
+from soilwater.case.validation import case_from_dict
 
 FOOTING = "strip-footing"
 #: The footing on a 5 B x 5 B regular grid of 11 x 11 nodes (spacing B/2).

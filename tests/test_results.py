@@ -8,10 +8,10 @@ import pandas as pd
 import pytest
 import pyvista
 
-from comparisons.runner import METHODS
-from soil.errors import InputError
-from soil.problems import load_case
-from soil.results import MARKER, check_output_folder
+from soilwater.studies.harness.runner import METHODS
+from soilwater.errors import InputError
+from soilwater.case.loader import load_case
+from soilwater.results import MARKER, check_output_folder
 
 FAST = ["time.steps=3", "time.end=1.0"]  # terzaghi in three steps: about a second
 

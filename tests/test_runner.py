@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from comparisons.runner import Job, run, table
+from soilwater.studies.harness.runner import Job, run, table
 
 JOBS = [Job("soil-column", "efg", ("time.end=100.0", f"efg.weight_p={w}"),
             labels=(("weights", w),)) for w in ("quartic", "exp:0.25")]
@@ -34,7 +34,7 @@ def test_a_rerun_reads_the_cache(tmp_path):
 def test_a_result_of_another_linear_solver_is_never_reused(tmp_path, monkeypatch):
     """The cache key holds the solver's name and version: the same job under another
     solver (or another version of it) is run, not read, and its summary names it."""
-    import comparisons.runner as runner
+    import soilwater.studies.harness.runner as runner
 
     job = Job("soil-column", "efg", ("time.end=100.0",), linear_solver="superlu")
     first = run([job], workers=1, cache_dir=tmp_path, progress=False)[0]
@@ -48,13 +48,14 @@ def test_a_result_of_another_linear_solver_is_never_reused(tmp_path, monkeypatch
 
 def test_a_change_to_one_solver_keeps_the_other_solvers_runs(tmp_path, monkeypatch):
     """The cache key hashes only the sources a method depends on: editing ``efg/``
-    changes EFG's keys and not FEM's; editing ``soil/`` changes both."""
-    import comparisons.runner as runner
+    changes EFG's keys and not FEM's; editing the shared library changes both; editing a
+    study changes neither."""
+    import soilwater.studies.harness.runner as runner
 
-    for folder in ("soil", "efg", "fem_reference"):
+    for folder in ("physics", "efg", "fem", "studies"):
         (tmp_path / folder).mkdir()
         (tmp_path / folder / "a.py").write_text(f"# {folder}\n")
-    monkeypatch.setattr(runner, "ROOT", tmp_path)
+    monkeypatch.setattr(runner, "PACKAGE", tmp_path)
     efg, fem = Job("soil-column", "efg"), Job("soil-column", "fem-th")
 
     def keys():
@@ -65,7 +66,9 @@ def test_a_change_to_one_solver_keeps_the_other_solvers_runs(tmp_path, monkeypat
     (tmp_path / "efg" / "a.py").write_text("# efg, edited\n")
     second = keys()
     assert second[0] != first[0] and second[1] == first[1]
-    (tmp_path / "soil" / "a.py").write_text("# soil, edited\n")
+    (tmp_path / "physics" / "a.py").write_text("# physics, edited\n")
     third = keys()
     assert third[0] != second[0] and third[1] != second[1]
+    (tmp_path / "studies" / "a.py").write_text("# a study, edited\n")
+    assert keys() == third
     runner.code_version.cache_clear()

@@ -1,14 +1,14 @@
 """The shear-band measure on synthetic fields, the predicted band, and short
-rough-platen runs (comparisons.metrics.band, comparisons.shearband)."""
+rough-platen runs (soilwater.studies.harness.metrics.band, soilwater.studies.shearband.study)."""
 
 import numpy as np
 import pytest
 
-from comparisons.deformation import nodal_strain
-from comparisons.metrics import LOCALISED, band
-from comparisons.shearband import CASE, prediction
-from comparisons.runner import solver
-from soil.problems import load_case
+from soilwater.studies.harness.deformation import nodal_strain
+from soilwater.studies.harness.metrics import LOCALISED, band
+from soilwater.studies.shearband.study import CASE, prediction
+from soilwater.studies.harness.runner import solver
+from soilwater.case.loader import load_case
 
 #: A synthetic specimen 3 x 4 m, 25 x 33 nodes (spacing 0.125 m).
 XY = np.stack(np.meshgrid(np.linspace(0, 3, 25), np.linspace(0, 4, 33)), -1).reshape(-1, 2)

@@ -1,14 +1,14 @@
-"""The kernels that run on parts of their work side by side (soil.threads): the same
+"""The kernels that run on parts of their work side by side (soilwater.linalg.threads): the same
 results on any number of threads, and a clear error for a bad thread count."""
 
 import numpy as np
 import pytest
 
-import efg.solver
-from comparisons.bench import compression
-from soil.errors import InputError
-from soil.linear import linear_solver
-from soil.threads import parts, run
+import soilwater.efg.solver
+from soilwater.studies.bench.study import compression
+from soilwater.errors import InputError
+from soilwater.linalg.backends import linear_solver
+from soilwater.linalg.threads import parts, run
 
 
 @pytest.mark.parametrize("value", ["0", "two", "-1", "1.5"])
@@ -27,7 +27,7 @@ def test_an_efg_step_is_the_same_on_one_thread_and_on_three(monkeypatch):
     for count in ("1", "3"):
         monkeypatch.setenv("SOILWATER_THREADS", count)
         with linear_solver("superlu"):
-            result = efg.solver.solve(compression(300), progress=False)
+            result = soilwater.efg.solver.solve(compression(300), progress=False)
         results[count] = result
     one, three = results["1"], results["3"]
     assert one.history.equals(three.history)

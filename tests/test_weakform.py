@@ -4,10 +4,10 @@ coefficients are the dense construction's, term by term."""
 import numpy as np
 import pytest
 
-from soil.elastic import LinearElastic
-from soil.kinematics import in_plane, spatial_tangent, strain_increment
-from soil.case import Fluid
-from soil import weakform
+from soilwater.material.elastic import LinearElastic
+from soilwater.material.kinematics import in_plane, spatial_tangent, strain_increment
+from soilwater.case.model import Fluid
+from soilwater.physics import weakform
 
 FLUID = Fluid(permeability=1e-4, gamma_w=10.0, biot_alpha=0.8, storage=1e-3)
 DT, BETA = 2.0, 1e-3
@@ -40,7 +40,7 @@ def _residual(material, H, p, grad_p, state):
 @pytest.mark.parametrize("size", [1e-4, 1e-3])
 def test_tangent_is_the_derivative_of_the_residual(size):
     """Central differences in every trial slot (grad u, p, grad p) against
-    :func:`soil.weakform.tangent`: the continuity rows (to 1e-7 of their own largest
+    :func:`soilwater.physics.weakform.tangent`: the continuity rows (to 1e-7 of their own largest
     coefficient) and the pressure columns to 1e-7, the momentum block to within the
     tangent's stated approximation (the spin acting on the updated stress: of the order of
     the increment, here below 10 x its size)."""
@@ -70,7 +70,7 @@ def test_tangent_is_the_derivative_of_the_residual(size):
 @pytest.mark.parametrize("law", ["taylor", "kozeny-carman"])
 def test_flux_tangent_follows_the_void_ratio(law):
     """With k = k(e), the flux rows' derivative in grad u (through ``v = v_n J``) is exact
-    in :func:`soil.weakform.tangent`: central differences to 1e-7; and the buoyant weight
+    in :func:`soilwater.physics.weakform.tangent`: central differences to 1e-7; and the buoyant weight
     is a dead load (the momentum rows' value slot is ``w gamma'``, with no tangent)."""
     fluid = Fluid(permeability=1e-4, gamma_w=10.0, permeability_law=law,
                   permeability_e=0.9, permeability_ck=0.4)
@@ -131,7 +131,7 @@ def _dense_tangent(C, effective, total, J, Finv, w, fluid, dt, beta, v_n, grad_p
     ("kozeny-carman", 1e-3, 1e-4, 35)])  # and the flux's change with the void ratio
 def test_compact_tangent_is_the_dense_construction_term_by_term(law, storage, permeability,
                                                                 terms):
-    """On random input at 50 points, every term of :func:`soil.weakform.tangent` equals the
+    """On random input at 50 points, every term of :func:`soilwater.physics.weakform.tangent` equals the
     dense construction's to 1e-14 of its largest coefficient, and every coefficient the
     compact form leaves out is exactly zero there."""
     rng = np.random.default_rng(7)

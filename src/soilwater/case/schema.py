@@ -1,0 +1,351 @@
+"""The TOML schema of a case: sections, keys, defaults, load-time bounds and overrides.
+
+A case is a TOML file (or a built-in name, see :func:`soilwater.case.loader.builtin_cases`) read
+by :func:`soilwater.case.loader.load_case`; :func:`soilwater.case.validation.case_from_dict` checks it
+against this schema and builds the :class:`soilwater.case.model.Case` the solvers read. This module
+holds the schema's documentation and constants (the sections and their keys, the
+bounds) and the edits of a raw case dict (:func:`apply_override`,
+:func:`expand_displacement`). Units are those of the case (kPa, m, s in the built-in
+cases).
+
+Conventions: x to the right, y up, origin at the lower-left corner of the rectangle;
+stress and traction are tension positive (a traction ``[0, -1]`` on the top edge is a
+compressive load); pore water pressure p_w is compression positive;
+``sigma = sigma' - alpha p_w I``. Gravity (``[gravity]``) acts along -y; p_w is then the
+pore pressure in excess of hydrostatic, the water table at or above the top.
+
+Schema (every case has the same one; unknown keys are an error)::
+
+    name = "my-case"                  # default: the file's stem
+    description = "one line"
+    analysis = "coupled"              # "coupled" (Biot u-p, default) or "static" (dry,
+                                      # one load step, no pore pressure)
+
+    [geometry]
+    shape = "rectangle"               # the only shape
+    width = 3.0                       # m, along x, in [1e-6, 1e6]
+    height = 4.0                      # m, along y, in [1e-6, 1e6]
+
+    [discretisation]
+    nx = 7                            # grid nodes along x (>= 2): spacing width/(nx-1)
+    ny = 9                            # grid nodes along y (>= 2): spacing height/(ny-1)
+    layout = "grid+centres"           # "grid" (default) or grid plus one node per cell centre
+                                      # (spacing aspect hx/hy of every cell in [1e-3, 1e3])
+    # x = [[1.0, 16], [20.0, 24, 30.0]] # instead of nx: the grid lines along x in pieces
+                                      # [to (m), spacings, ratio]: from the previous
+                                      # piece's end (or 0) to "to" (increasing, the last
+                                      # at the width), the last spacing "ratio" times the
+                                      # first (default 1, in [1e-3, 1e3]), geometric in
+                                      # between; y (instead of ny) likewise, bottom to
+                                      # top; square EFG cells need a regular grid
+    jitter = 0.0                      # interior nodes moved at random by up to this
+                                      # fraction of the smallest spacing (0 <= jitter < 0.25)
+    seed = 0                          # seed of the jitter (numpy default_rng)
+
+    [material]                        # soilwater.material.presets.material_from_spec, plus fluid keys:
+    preset = "table1"
+    model = "original"                # "original", "modified" or "elastic"
+    permeability = 0.0                # k [m/s] >= 0 (Darcy: q = -(k/gamma_w) grad p_w)
+    gamma_w = 9.81                    # unit weight of water [kN/m3] > 0
+    biot_alpha = 1.0                  # Biot coefficient in (0, 1]
+    storage = 0.0                     # S = 1/M_biot [1/kPa] >= 0
+    permeability_law = "constant"     # or "taylor": k = k_ref 10^((e - e_k)/C_k), or
+                                      # "kozeny-carman": k = k_ref (e^3/(1+e)) /
+                                      # (e_k^3/(1+e_k)); k_ref = permeability
+    permeability_e = 1.2              # e_k > 0 (required by taylor and kozeny-carman)
+    permeability_ck = 0.5             # C_k > 0 (required by taylor)
+    specific_gravity = 2.65           # Gs of the solids > 1: the saturated unit weight
+                                      # (Gs + e) gamma_w / (1 + e) under gravity
+
+    [gravity]                         # optional
+    g = 9.81                          # m/s2 >= 0 along -y (default 0: weightless); the
+                                      # buoyant weight (Gs - 1) gamma_w (g / 9.81) / (1 + e)
+                                      # loads the skeleton (biot_alpha must be 1)
+
+    [initial]                         # optional
+    pore_pressure = "balance"         # a number (default 0) or "balance": p_w0 = -p'0/alpha,
+                                      # total stress zero; sigma'0 = -p'0 I (material p0)
+    stress = "uniform"                # or "geostatic": sigma'v from the buoyant weight
+                                      # under the surcharge, sigma'h = k0 sigma'v, e from
+                                      # the compression line (soilwater.physics.geostatic)
+    surcharge = 10.0                  # geostatic: kPa >= 0 on the top, in equilibrium at
+                                      # t = 0 (> 0 for Cam-clay: p' > 0 at the top)
+    k0 = "nc"                         # geostatic: in (0, 1], or "nc" (the material's
+                                      # normally consolidated value)
+    e_ref = 2.4                       # geostatic: void ratio > 0 on the normal compression
+    sigma_v_ref = 10.0                # line at this vertical effective stress [kPa] > 0
+                                      # (both or neither; default: e0 at p'0)
+    ocr = 1.0                         # geostatic: vertical overconsolidation ratio >= 1
+
+    [boundary.left]                   # each of left, right, bottom, top exactly once
+    ux = "fixed"                      # "free" (default), "fixed", "prescribed", "rigid"
+    uy = "free"
+    # displacement = "roller"         # shorthand instead of ux/uy: "roller" (normal
+                                      # component fixed), "fixed" or "free"
+    traction = [0.0, 0.0]             # total traction [kPa] x load factor (default zero)
+    water = "impermeable"             # or "drained" (p_w = 0); drained wins at a corner
+
+    [boundary.top.footing]            # optional named segments of an edge (any name of
+    from = 0.0                        # letters, digits, _, -): m along the edge in the
+    to = 1.0                          # initial configuration (x on top and bottom, y on
+                                      # left and right), 0 <= from < to <= edge length;
+                                      # disjoint segments; no traction of their own
+    ux = "fixed"                      # "free" (default), "fixed" or "prescribed"
+    uy = "footing"                    # the same, or "footing" (top or bottom edge only)
+    settlement_rate = 0.01            # footing: m/s, positive down (velocity control), or
+    # force = 50.0                    # kN/m, compression positive, x load factor (load
+                                      # control; at most one per case, none with a
+                                      # rigid edge); exactly one of the two
+    # water = "drained"               # default: the edge's water condition
+
+    [loading]                         # optional
+    velocity_gradient = [[0.0, 0.0], [0.0, -0.01]]   # L [1/s], constant (default zero)
+    load = 1.0                        # a factor from t = 0+ (step load, the default) or
+                                      # [[t0, f0], [t1, f1], ...] piecewise linear
+
+    [time]
+    end = 20.0                        # s
+    steps = 100                       # equal steps, or instead: dt0, growth, dt_max
+    on_failure = "error"              # a step that fails after every halving ends the
+                                      # run with an error and no result; "stop": the
+                                      # result ends at the last converged level, and
+                                      # its summary says where and why it stopped
+
+    [probes]                          # optional: name = [x, y] inside the domain;
+    centre = [1.5, 2.0]               # history columns are named like "p_w@centre"
+
+    [exact]                           # optional: a closed form of soilwater.references.closed_forms
+    solution = "timoshenko-beam"      # boundary data for "exact" edges, error reference
+    P = 1000.0                        # ... and the solution's parameters
+
+    [diagnostics]                     # optional, both solvers
+    uniqueness = false                # per step, the smallest eigenvalue of the tangent
+                                      # restricted to the undrained constraint
+                                      # (soilwater.diagnostics.bifurcation; history column "uniqueness")
+
+    [efg]                             # optional meshless settings (defaults shown)
+    weight_u = "quartic"              # MLS weight of u: quartic (Q), cubic or exp:C with
+                                      # 1e-3 <= C <= 1e3 (E-A = exp:0.5, E-B = exp:0.25)
+    scale_u = 1.3                     # support = scale x distance to the 8th nearest node,
+                                      # 1 <= scale <= 1000
+    weight_p = "quartic"              # the same for the pore pressure p_w
+    scale_p = 1.3
+    cells = "delaunay"                # background cells: delaunay or squares
+    order = 2                         # Gauss order (squares: per direction; triangles:
+                                      # degree, at most 19)
+    essential = "penalty"             # essential conditions: "penalty" or "nitsche"
+                                      # (soilwater.efg.nitsche: consistent, no factor to choose,
+                                      # a matrix on the stiffness's scale)
+    penalty = 1e6                     # penalty factor relative to the stiffness scale
+                                      # (essential = "penalty")
+    correction = "vci"                # consistent test gradients (soilwater.efg.vci) or "none"
+    stabilisation = "none"            # or "perturbation": the flow-equation term
+                                      # -h^2/(4M) int grad(p - p_n) . grad(q) of
+                                      # fem-p1p1-stab on the MLS pressure; or
+                                      # "projection": -(1/G) int (dp - Pi dp)(q - Pi q),
+                                      # Pi the mean over each background cell
+    stabilisation_factor = 1.0        # multiplies that h^2/(4M) or 1/G, 0 < f <= 1000
+
+    [fem]                             # optional FEM reference settings (defaults shown)
+    remesh = "never"                  # or "delaunay": after a converged step whose worst
+                                      # element's quality (soilwater.geometry.quality.cell_quality)
+                                      # is below remesh_quality, re-triangulate the
+                                      # current vertices (Delaunay inside the current
+                                      # boundary) and transfer the state (triangle
+                                      # pairs: fem-th, fem-p1p1, fem-p1p1-stab)
+    remesh_quality = 0.3              # in (0, 1]; 1 re-triangulates after every step
+
+Boundary kinds of a displacement component:
+
+* ``free``: natural; the edge's traction component acts there.
+* ``fixed``: zero displacement.
+* ``prescribed``: velocity ``v = L x`` at the node's current position, L from
+  ``loading.velocity_gradient`` (which must then be non-zero).
+* ``exact``: displacement from the case's ``[exact]`` solution; ``traction = "exact"``
+  likewise takes the traction ``sigma n`` from it.
+* ``rigid`` (``uy`` of the top or bottom edge only): the whole edge settles by one unknown
+  uniform vertical displacement (a frictionless rigid plate, Mandel's problem) whose total
+  force is ``traction[1] x load factor x (initial edge length)`` per unit thickness.
+
+* ``footing`` (``uy`` of a named segment of the top or bottom edge): a rigid strip
+  footing, the segment's uy moving as one body; ``settlement_rate`` imposes uy =
+  -rate x t on it, ``force`` lets it settle by one unknown whose total force is
+  ``-force x load factor`` (the ``rigid`` plate's machinery). With ``ux = "fixed"`` it
+  is rough (no sideways motion), with ``ux = "free"`` smooth. Coupled analyses only.
+
+A named segment overrides its edge's kinds (and, if given, its water condition) where
+the initial coordinate along the edge lies in ``[from, to]`` (within 1e-9 of the
+smallest spacing): at the EFG boundary Gauss points and the FEM DOFs there; the rest of
+the edge keeps the edge's conditions, its traction included. Each segment adds the
+history columns ``settlement@NAME`` (m, positive down: the footing's settlement, or the
+mean downward displacement of a segment that is no footing) and ``pressure@NAME``
+(kPa, compression positive: the vertical force the boundary exerts on the soil there, in
+excess of the initial state, over the current width; see
+:func:`soilwater.nonlinear.coupling.segment_columns`).
+
+At a corner both edges' conditions apply (a segment that reaches the corner counts
+there); two different non-free kinds on the same
+component of a corner are an error. Tractions are loads in excess of the initial state,
+which is taken as in equilibrium.
+
+Every number must be finite. Load-time bounds (:func:`soilwater.case.validation.case_from_dict`
+refuses a case outside them, naming the key, so that ``soilwater show`` fails wherever
+``run`` would):
+
+* ``geometry.width`` and ``height`` in [1e-6, 1e6] m, and the grid spacing aspect
+  ``hx/hy = (width/(nx-1)) / (height/(ny-1))`` in [1e-3, 1e3]: bounds against absurd
+  input (a width of 1e300 overflows the EFG's cell search, inf breaks both solvers).
+  Within them a stretched plain grid still needs a larger EFG scale factor, about a
+  quarter of the aspect (long over short spacing) beyond an aspect of 4; the solver
+  reports that, naming the scale factor's key.
+* The displacement must be restrained against the three rigid motions: some edge's ``ux``
+  and some edge's ``uy`` ``fixed``, ``prescribed`` or ``exact`` (a ``rigid`` plate is
+  load-controlled and stops no translation), and rotation stopped by ``ux`` restrained on
+  the left or right edge, ``uy`` on the top or bottom edge, or ``ux`` on both the top and
+  bottom (``uy`` on both the left and right).
+* ``efg.scale_u`` and ``scale_p`` in [1, 1000]: below 1 a node's support stops short of
+  its 8th nearest node, the distance that defines it, and whether each point still sees
+  3 non-collinear nodes depends on the layout (on the built-in cases and their variants
+  the smallest working factor ranges from 0.69 to 0.90, with condition numbers down to
+  1e-7, and stretched grids need more); above 1000 the supports cover the body many times
+  over and the moment matrices' conditioning, falling as 1/scale^2, nears the MLS
+  safeguard (reached near 1e4 to 1e5).
+* ``efg.weight_u`` and ``weight_p``: :func:`soilwater.efg.settings.weight_form` (outside
+  1e-3 <= C <= 1e3 the exponential weight underflows to a spike or, above, equals its
+  limit ``1 - r^2`` to 1e-6 while its formula loses digits and divides by zero near
+  C = 1e8).
+* ``efg.order`` an integer >= 1, at most 19 with Delaunay cells (the highest triangle
+  rule of scikit-fem).
+
+Time stepping: ``steps`` gives equal steps; otherwise ``t_1 = dt0`` and
+``t_{n+1} = t_n + min((growth - 1) t_n, dt_max)`` (time levels grow geometrically until the
+step reaches ``dt_max``), the last step cut to land on ``end``. This is MOOSE's Terzaghi
+stepping (``dt = min(0.5 t, 0.1)``, peer-data case A): 118 steps to t = 10.
+
+:func:`soilwater.case.loader.load_case` also takes overrides ``"section.key=value"`` (value in
+TOML syntax, a bare word is read as a string; :func:`apply_override`), e.g.
+``material.permeability=1e-6`` or ``boundary.top.water="drained"``. Setting
+``time.steps`` drops the geometric keys (and the reverse), setting ``discretisation.nx``
+drops ``discretisation.x`` (and the reverse; likewise ``ny`` and ``y``); setting an edge's
+``displacement`` replaces its ``ux`` and ``uy``.
+"""
+
+import tomllib
+
+from soilwater.errors import require
+
+SECTIONS = ("geometry", "discretisation", "material", "initial", "gravity", "boundary",
+            "loading", "time", "probes", "exact", "diagnostics", "efg", "fem")
+"""The sections of a case, besides the top-level keys ``name``, ``description`` and
+``analysis``."""
+KEYS = {
+    "geometry": ("shape", "width", "height"),
+    "discretisation": ("nx", "ny", "x", "y", "layout", "jitter", "seed"),
+    "diagnostics": ("uniqueness",),
+    "initial": ("pore_pressure", "stress", "surcharge", "k0", "e_ref", "sigma_v_ref", "ocr"),
+    "gravity": ("g",),
+    "edge": ("ux", "uy", "displacement", "traction", "water"),
+    "segment": ("from", "to", "ux", "uy", "water", "settlement_rate", "force"),
+    "loading": ("velocity_gradient", "load"),
+    "time": ("end", "steps", "dt0", "growth", "dt_max", "on_failure"),
+    "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "cells", "order", "essential",
+            "penalty", "correction", "stabilisation", "stabilisation_factor"),
+    "fem": ("remesh", "remesh_quality"),
+}
+"""The keys each section accepts (``edge``: each ``[boundary.<side>]``, which also takes
+named segments as sub-tables; ``segment``: each ``[boundary.<side>.<name>]``). ``[material]``,
+``[probes]`` and ``[exact]`` take the keys of the material, the probe names and the
+solution's parameters."""
+GEOMETRIC = ("dt0", "growth", "dt_max")
+"""The keys of geometric time stepping (instead of ``time.steps``)."""
+LENGTHS = (1e-6, 1e6)
+"""Accepted range of ``geometry.width`` and ``height`` [m]."""
+ASPECTS = (1e-3, 1e3)
+"""Accepted range of the grid spacing aspect ``hx/hy``."""
+GRADINGS = (1e-3, 1e3)
+"""Accepted range of the ratio of a grid piece (``discretisation.x``, ``y``: last spacing
+over first)."""
+SCALES = (1.0, 1e3)
+"""Accepted range of the MLS support scale factors ``efg.scale_u`` and ``scale_p``."""
+MAX_TRIANGLE_ORDER = 19
+"""Highest degree of scikit-fem's triangle rules (``efg.order`` with Delaunay cells)."""
+_NORMAL = {"left": "ux", "right": "ux", "bottom": "uy", "top": "uy"}
+
+
+def apply_override(data, text):
+    """Set ``section.key[.key]=value`` in a raw case dict, in place.
+
+    Parameters
+    ----------
+    data : dict
+        The case in TOML layout, not yet validated.
+    text : str
+        ``section.key=value`` with the value in TOML syntax (a bare word is read as a
+        string), e.g. ``material.permeability=1e-6`` or ``boundary.top.water=drained``.
+        Setting ``time.steps`` drops the geometric keys (and the reverse), setting
+        ``discretisation.nx`` drops ``discretisation.x`` (and the reverse, likewise for y);
+        setting an edge's ``displacement`` replaces its ``ux`` and ``uy``, and setting ``ux`` or
+        ``uy`` of an edge given by ``displacement`` expands the shorthand first.
+
+    Raises
+    ------
+    InputError
+        A malformed override, or one that descends into a value.
+
+    Examples
+    --------
+    >>> data = {"time": {"end": 1.0, "dt0": 0.1, "growth": 1.5, "dt_max": 0.5}}
+    >>> apply_override(data, "time.steps=10")
+    >>> data
+    {'time': {'end': 1.0, 'steps': 10}}
+    """
+    key, sep, value = text.partition("=")
+    path = [part.strip() for part in key.split(".")]
+    require(sep and all(path), f"override {text!r}: write section.key=value, "
+            "e.g. material.permeability=1e-6")
+    try:
+        value = tomllib.loads(f"v = {value}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = value.strip()
+    table = data
+    for depth, part in enumerate(path[:-1]):
+        table = table.setdefault(part, {})
+        require(isinstance(table, dict), f"override {text!r}: "
+                f"{'.'.join(path[:depth + 1])} is a value, not a section")
+    last = path[-1]
+    for other in _replaced_keys(path):
+        table.pop(other, None)
+    if len(path) == 3 and last in ("ux", "uy") and "displacement" in table:
+        table.update(expand_displacement(table.pop("displacement"), path[1]))
+    table[last] = value
+
+
+def _replaced_keys(path):
+    """Keys that an override of ``path`` replaces (the other way of saying the same)."""
+    if path[0] == "time" and path[-1] == "steps":
+        return GEOMETRIC
+    if path[0] == "time" and path[-1] in GEOMETRIC:
+        return ("steps",)
+    if path[0] == "discretisation" and path[-1] in ("nx", "ny", "x", "y"):
+        return ({"nx": "x", "ny": "y", "x": "nx", "y": "ny"}[path[-1]],)
+    if path[0] == "boundary" and path[-1] == "displacement":
+        return ("ux", "uy")
+    return ()
+
+
+def expand_displacement(value, side):
+    """The ``displacement`` shorthand of edge ``side`` as ``{"ux": ..., "uy": ...}``.
+
+    ``roller`` fixes the edge's normal component (``ux`` on the left and right edges,
+    ``uy`` on the bottom and top) and frees the other; ``fixed`` and ``free`` set both.
+
+    Examples
+    --------
+    >>> expand_displacement("roller", "bottom")
+    {'ux': 'free', 'uy': 'fixed'}
+    """
+    require(value in ("roller", "fixed", "free"), f"boundary.{side}.displacement = "
+            f"{value!r} is unknown: use roller, fixed or free (or set ux and uy)")
+    if value == "roller":
+        return {"ux": "free", "uy": "free", _NORMAL[side]: "fixed"}
+    return {"ux": value, "uy": value}

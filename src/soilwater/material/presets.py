@@ -1,0 +1,106 @@
+"""Material presets and the factory that builds a material from a TOML table.
+
+A material table names a ``model`` (``original``, ``modified`` or ``elastic``), may
+start from a ``preset`` and overrides any of its entries. Cam-clay keys: ``lambda``,
+``kappa``, ``M``, ``nu``, ``e0``, ``p0``, ``ocr``, ``G``; elastic keys: ``E``, ``nu``,
+``p0``, ``e0``. Unknown keys are an error.
+"""
+
+import tomllib
+from pathlib import Path
+
+from soilwater.material.camclay import CamClay
+from soilwater.material.elastic import LinearElastic
+from soilwater.errors import InputError, require
+
+#: The paper's Table 1 (Cam-clay); p'0 = 3.0 in the case's stress unit.
+PRESETS = {
+    "table1": {"lambda": 0.11, "kappa": 0.04, "M": 1.42, "nu": 0.333, "e0": 0.83, "p0": 3.0},
+}
+
+_CAMCLAY_KEYS = {"lambda": "lam", "kappa": "kappa", "M": "M", "nu": "nu", "e0": "e0",
+                 "p0": "p0", "ocr": "ocr", "G": "G"}
+_ELASTIC_KEYS = {"E": "E", "nu": "nu", "p0": "p0", "e0": "e0"}
+
+
+def material_from_spec(spec):
+    """Build a material from a mapping such as a TOML ``[material]`` table.
+
+    Parameters
+    ----------
+    spec : mapping
+        ``model`` (default ``original``), optional ``preset`` and parameter keys.
+        Keys that describe the pore fluid and the weight (:data:`FLUID_KEYS`) are
+        ignored here; :mod:`soilwater.case.model` reads them. ``model =
+        "elastic"`` with a Cam-clay preset is the linear elastic skeleton with the
+        preset's initial moduli (``K = v0 p'0 / kappa`` and its ``nu``), p'0 and e0, for
+        comparing a skeleton that cannot yield with the clay; explicit ``E``, ``nu`` or
+        ``p0`` replace them.
+
+    Returns
+    -------
+    CamClay or LinearElastic
+
+    Examples
+    --------
+    >>> material_from_spec({"preset": "table1", "model": "modified"}).model
+    'modified'
+    >>> round(material_from_spec({"preset": "table1", "model": "elastic"}).E, 3)
+    137.524
+    """
+    spec = {k: v for k, v in spec.items() if k not in FLUID_KEYS}
+    model = spec.pop("model", "original")
+    preset = spec.pop("preset", None)
+    values = {}
+    if preset is not None:
+        require(preset in PRESETS, f"material.preset = {preset!r} is unknown: "
+                f"use one of {', '.join(PRESETS)}")
+        values.update(PRESETS[preset])
+        if model == "elastic" and "kappa" in values:
+            values = _initial_elasticity(values)
+    values.update(spec)
+    keys = _ELASTIC_KEYS if model == "elastic" else _CAMCLAY_KEYS
+    unknown = sorted(set(values) - set(keys))
+    require(not unknown, f"material: unknown key(s) {', '.join(unknown)} for model "
+            f"{model!r}: allowed are {', '.join(keys)} (and in a case {', '.join(FLUID_KEYS)})")
+    kwargs = {keys[k]: v for k, v in values.items()}
+    try:
+        if model == "elastic":
+            return LinearElastic(**kwargs)
+        return CamClay(model=model, **kwargs)
+    except TypeError as err:
+        missing = "E, nu" if model == "elastic" else "lambda, kappa, M, nu, e0, p0"
+        raise InputError(f"material: missing parameters for model {model!r} "
+                         f"(needs {missing}): {err}") from None
+
+
+def _initial_elasticity(clay):
+    """``E``, ``nu`` and ``p0`` of a Cam-clay parameter set's initial elastic moduli."""
+    K, G = CamClay(**{_CAMCLAY_KEYS[k]: v for k, v in clay.items()}).moduli()
+    return {"E": float(9 * K * G / (3 * K + G)),
+            "nu": float((3 * K - 2 * G) / (2 * (3 * K + G))), "p0": clay["p0"],
+            "e0": clay["e0"]}
+
+
+#: Fluid keys that may sit in a material table; they belong to the coupled problem.
+FLUID_KEYS = ("permeability", "gamma_w", "biot_alpha", "storage", "permeability_law",
+              "permeability_e", "permeability_ck", "specific_gravity")
+
+
+def load_material(name_or_path, **overrides):
+    """A preset name (``table1``) or a TOML file with a ``[material]`` table (or bare keys).
+
+    Keyword overrides (``model="modified"``, ``ocr=2``) replace entries.
+    """
+    path = Path(name_or_path)
+    if path.suffix == ".toml" or path.exists():
+        require(path.exists(), f"material file {str(path)!r} does not exist")
+        with path.open("rb") as fh:
+            data = tomllib.load(fh)
+        spec = dict(data.get("material", data))
+    else:
+        require(name_or_path in PRESETS, f"material {name_or_path!r} is neither a preset "
+                f"({', '.join(PRESETS)}) nor a TOML file")
+        spec = {"preset": name_or_path}
+    spec.update({k: v for k, v in overrides.items() if v is not None})
+    return material_from_spec(spec)

@@ -1,0 +1,235 @@
+"""Result files: written whole or not at all.
+
+A failed run must leave no half-written output and never write NaN, so every writer
+goes through a temporary file in the target folder and an atomic rename.
+
+Nothing deletes a file or folder that soilwater did not write: a result folder holds the
+marker file :data:`MARKER`, and :func:`check_output_folder` refuses any other target.
+"""
+
+import json
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass, field
+from importlib.metadata import version
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pandas as pd
+
+from soilwater.errors import InputError, SoilwaterError
+
+#: File in every result folder :meth:`Result.write` writes; only a folder holding it (or an
+#: empty one) is ever replaced.
+MARKER = ".soilwater-output"
+
+_FIX = "name a new or empty folder, e.g. --out runs/NAME"
+
+
+def check_output_folder(path):
+    """Resolve a result folder, refusing one that soilwater must not write or replace.
+
+    ``~`` is expanded and symbolic links, ``.`` and ``..`` are resolved first. A folder
+    that does not exist yet, an empty folder and a folder holding :data:`MARKER` (a
+    previous result) are accepted.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    Path
+        The resolved folder.
+
+    Raises
+    ------
+    InputError
+        If the folder is the current folder or holds it, is the home folder or holds it,
+        is a file, or is a non-empty folder without :data:`MARKER`.
+
+    Examples
+    --------
+    >>> check_output_folder(".")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    soilwater.errors.InputError: --out . (= ...): the current folder or a folder holding it ...
+    """
+    folder = Path(path).expanduser().resolve()
+    shown = str(path) if str(path) == str(folder) else f"{path} (= {folder})"
+    cwd, home = Path.cwd().resolve(), Path.home().resolve()
+    if folder == cwd or folder in cwd.parents:
+        raise InputError(f"--out {shown}: the current folder or a folder holding it "
+                         f"cannot be a result folder, which is replaced whole; {_FIX}")
+    if folder == home or folder in home.parents:
+        raise InputError(f"--out {shown}: the home folder or a folder holding it cannot "
+                         f"be a result folder, which is replaced whole; {_FIX}")
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"--out {shown} is a file, not a folder; {_FIX}")
+    if folder.is_dir() and not (folder / MARKER).is_file() and any(folder.iterdir()):
+        raise InputError(f"--out {shown} holds files soilwater did not write (no {MARKER} "
+                         f"file); {_FIX}, or empty it yourself")
+    return folder
+
+
+def write_csv(frame, path):
+    """Write a DataFrame to ``path`` atomically, refusing non-finite numbers.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+    path : str or Path
+
+    Raises
+    ------
+    InputError
+        If ``path`` is an existing folder (nothing is written).
+    SoilwaterError
+        If a numeric column holds NaN or infinity (nothing is written).
+    """
+    if Path(path).is_dir():
+        raise InputError(f"--out {path} is a folder: name a CSV file, e.g. "
+                         f"{Path(path) / 'path.csv'}")
+    numbers = frame.select_dtypes("number").to_numpy(dtype=float)
+    if not np.isfinite(numbers).all():
+        raise SoilwaterError(f"refusing to write {path}: the table holds NaN or infinity")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", newline="") as fh:
+            frame.to_csv(fh, index=False)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def permeability(case, v):
+    """``{"permeability": k}`` [m/s] at specific volumes v when k depends on the void
+    ratio (``material.permeability_law``), else ``{}``: the snapshot field."""
+    fluid = case.fluid
+    if fluid.permeability_law == "constant":
+        return {}
+    return {"permeability": fluid.mobility_at(v)[0] * fluid.gamma_w}
+
+
+@dataclass
+class Snapshot:
+    """Fields at one output time: points (N, 2) [m] and named point arrays."""
+
+    time: float
+    points: np.ndarray
+    point_data: dict
+    cells: list = field(default_factory=list)
+
+
+@dataclass
+class Result:
+    """What every solver returns and ``soilwater run`` writes.
+
+    Parameters
+    ----------
+    case : Case
+    method : str
+        ``efg``, ``fem-th``, ...
+    options : dict
+        Method options as run (weights, scale factors, cells, penalty factor, ...).
+    history : pandas.DataFrame
+        One row per step; at least ``time, eps_a, p, q, err`` for the coupled solvers.
+    snapshots : list of Snapshot
+        Fields at output steps (meshless nodes as a point cloud, or a mesh with cells).
+    summary : dict
+        Timings, step count, convergence, metrics; JSON-serialisable.
+    """
+
+    case: object
+    method: str
+    options: dict
+    history: pd.DataFrame
+    snapshots: list
+    summary: dict
+
+    def write(self, folder):
+        """Write ``summary.json``, ``history.csv``, ``fields.pvd``, VTU files and
+        :data:`MARKER` to ``folder``.
+
+        ``folder`` must pass :func:`check_output_folder`. Everything goes to a hidden
+        temporary sibling folder; only when it is complete does it take the place of
+        ``folder`` (a previous result is renamed aside, the new one renamed in, the old one
+        removed). On any failure, including KeyboardInterrupt, the temporary folder is
+        removed and ``folder`` is left as it was.
+
+        Returns
+        -------
+        Path
+            The resolved folder written.
+        """
+        folder = check_output_folder(folder)
+        folder.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(dir=folder.parent, prefix=f".{folder.name}.",
+                                    suffix=".tmp"))
+        old = tmp.with_suffix(".old")
+        try:
+            self._write_files(tmp)
+            check_output_folder(folder)  # again: the folder may have changed during the run
+            _swap(tmp, folder, old)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        shutil.rmtree(old, ignore_errors=True)
+        return folder
+
+    def _write_files(self, folder):
+        marker = {"written_by": "soilwater", "version": version("soilwater"),
+                  "note": "soilwater run replaces this folder whole"}
+        (folder / MARKER).write_text(json.dumps(marker) + "\n")
+        write_csv(self.history, folder / "history.csv")
+        summary = {"case": self.case.to_dict(), "method": self.method,
+                   "options": self.options, "versions": versions(), **self.summary}
+        (folder / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
+        self._write_fields(folder)
+
+    def _write_fields(self, folder):
+        entries = []
+        for k, snap in enumerate(self.snapshots):
+            for name, values in snap.point_data.items():
+                if not np.isfinite(values).all():
+                    raise SoilwaterError(f"refusing to write field {name!r} at t = "
+                                         f"{snap.time}: it holds NaN or infinity")
+            cells = snap.cells or [("vertex", np.arange(len(snap.points))[:, None])]
+            name = f"fields_{k:04d}.vtu"
+            points3 = np.column_stack([snap.points, np.zeros(len(snap.points))])
+            meshio.write(folder / name, meshio.Mesh(points3, cells, point_data=snap.point_data))
+            entries.append(f'    <DataSet timestep="{float(snap.time)!r}" file="{name}"/>')
+        (folder / "fields.pvd").write_text(
+            '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+            "  <Collection>\n" + "\n".join(entries) + "\n  </Collection>\n</VTKFile>\n")
+
+
+def _swap(new, folder, old):
+    """Put folder ``new`` in the place of ``folder``; a previous ``folder`` goes to ``old``.
+
+    If renaming ``new`` in fails, the previous ``folder`` is renamed back.
+    """
+    if folder.exists():
+        os.rename(folder, old)
+    try:
+        os.rename(new, folder)
+    except BaseException:
+        if old.exists():
+            os.rename(old, folder)
+        raise
+
+
+def versions():
+    """Versions of soilwater and the libraries a result depends on."""
+    import scipy
+    import skfem
+
+    return {"soilwater": version("soilwater"), "numpy": np.__version__,
+            "scipy": scipy.__version__, "scikit-fem": skfem.__version__,
+            "meshio": meshio.__version__}

@@ -1,0 +1,441 @@
+"""Figures of the report, one function per figure; each saves a PNG and returns its path."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from soilwater.material.driver import closed_form_q, run_test  # noqa: E402
+from soilwater.material.presets import material_from_spec  # noqa: E402
+from soilwater.efg.settings import DEFAULT_SCALE  # noqa: E402
+
+
+def stress_paths_driver(path, preset="table1", strain=0.3):
+    """q/p'0 against p'/p'0 from the stress-point driver, closed forms drawn over.
+
+    Two panels (undrained plane strain, undrained simple shear), original and modified
+    Cam-clay, normally consolidated at p'0.
+    """
+    tests = {"undrained-plane-strain": "Undrained plane strain (D$_{22}$ = -D$_{11}$)",
+             "undrained-simple-shear": "Undrained simple shear (L$_{12}$)"}
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.4), sharey=True, constrained_layout=True)
+    for ax, (test, title) in zip(axes, tests.items()):
+        for model, colour in (("original", "C0"), ("modified", "C3")):
+            clay = material_from_spec({"preset": preset, "model": model})
+            table = run_test(clay, test, strain)
+            p, q = table.p / clay.p0, table.q / clay.p0
+            ax.plot(p, q, color=colour, lw=2, label=f"{model} Cam-clay, driver")
+            pc = np.linspace(p.min(), 1.0, 14) * clay.p0
+            ax.plot(pc / clay.p0, closed_form_q(clay, pc) / clay.p0, "o", mfc="none",
+                    color="k", ms=5, label="closed form" if model == "modified" else None)
+        pl = np.array([0.0, 1.05])
+        ax.plot(pl, clay.M * pl, "k--", lw=1, label=f"critical state q = {clay.M} p'")
+        ax.set(title=f"{title}, to {strain:g} strain", xlabel="p'/p'$_0$",
+               xlim=(0, 1.05), ylim=(0, 1.05))
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("q/p'$_0$")
+    axes[1].legend(loc="upper left", fontsize=9)
+    fig.suptitle("Table 1 clay, normally consolidated: stress-point driver vs closed form")
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def background_cells(path):
+    """Paper Figs. 3 and 5: background cells of the 111-node unconfined-compression specimen.
+
+    Four panels, axes in m: square cells of the initial nodal spacing, quartered along the
+    boundary, with their 2 x 2 Gauss points; the Delaunay triangles with their 3 Gauss
+    points (degree 2); the triangles with their dual Voronoi diagram; both cell types
+    rebuilt on the specimen compressed by 20 % and barrelled,
+    x -> x (1 + 0.15 cos(pi y / 2H)), y -> 0.8 y.
+    """
+    from matplotlib.collections import PolyCollection
+    from scipy.spatial import Voronoi, voronoi_plot_2d
+
+    from soilwater.efg.quadrature import delaunay_cells, square_cells
+    from soilwater.case.loader import load_case
+
+    case = load_case("unconfined-compression")
+    nodes, loop, height = case.nodes(), case.boundary_loop(), case.geometry.height
+    x, y = nodes.T
+    bulged = np.column_stack([x * (1 + 0.15 * np.cos(np.pi * y / (2 * height))), 0.8 * y])
+
+    def squares(ax, points):
+        q = square_cells(points[loop], case.spacing)
+        quarter = np.ptp(q.cells[:, :, 0], axis=1) < 0.75 * case.spacing[0]
+        for cells, colour, label in ((q.cells[~quarter], "0.3", "full square cell"),
+                                     (q.cells[quarter], "C0", "quarter cell")):
+            ax.add_collection(PolyCollection(cells, facecolors="none", edgecolors=colour,
+                                             linewidths=0.8, label=label))
+        ax.plot(*q.points.T, "+", color="C3", ms=3, mew=0.6, label="Gauss point")
+        return f"{np.sum(~quarter)} full + {np.sum(quarter)} quarter cells, {len(q.points)}"
+
+    def triangles(ax, points, **style):
+        q = delaunay_cells(points, points[loop])
+        ax.triplot(*points.T, q.triangles, color="C2", label="Delaunay triangle", **style)
+        return f"{len(q.triangles)} triangles, {len(q.points)}", q.points
+
+    fig, axes = plt.subplots(1, 4, figsize=(15, 5.8), constrained_layout=True)
+    counts, points = triangles(axes[1], nodes, lw=0.8)
+    axes[1].plot(*points.T, "+", color="C3", ms=3, mew=0.6)
+    voronoi_plot_2d(Voronoi(nodes), axes[2], show_points=False, show_vertices=False,
+                    line_colors="C1", line_width=0.9)
+    axes[2].plot([], [], color="C1", label="Voronoi edge")
+    triangles(axes[2], nodes, lw=0.6, alpha=0.6)
+    titles = [f"Square cells: {squares(axes[0], nodes)} points",
+              f"Delaunay cells: {counts} points",
+              f"{counts.split(',')[0]} and their dual Voronoi diagram",
+              f"20 % compressed and barrelled:\nsquares {squares(axes[3], bulged)} points;"
+              f"\n{triangles(axes[3], bulged, lw=0.5, alpha=0.7)[0]} points"]
+    axes[3].plot(*np.vstack([bulged[loop], bulged[:1]]).T, "k", lw=1.4,
+                 label="current boundary")
+    limits = (-0.25, bulged[:, 0].max() + 0.25), (-0.25, height + 0.25)
+    for ax, title, shown in zip(axes, titles, (nodes, nodes, nodes, bulged)):
+        ax.plot(*shown.T, "ko", ms=2.5, label="node")
+        ax.set(aspect="equal", xlim=limits[0], ylim=limits[1], xlabel="x (m)",
+               ylabel="y (m)")
+        ax.set_title(title, fontsize=9.5)
+    handles = {}
+    for ax in axes[[3, 2]]:
+        handles.update(zip(*ax.get_legend_handles_labels()[::-1]))
+    fig.legend(handles.values(), handles.keys(), loc="outside lower center", ncol=7,
+               fontsize=9)
+    fig.suptitle("Background cells of the 111-node specimen (paper Figs. 3 and 5), initial "
+                 "nodal spacing {:g} x {:g} m".format(*case.spacing))
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def shape_functions(path, scale=DEFAULT_SCALE):
+    """Paper Fig. 7: an interior node's MLS shape function and its x-derivative.
+
+    phi_I and h dphi_I/dx along the line y = y_I through a centre node of a square grid,
+    for the weights Q (quartic), E-A (exponential, c = 0.5) and E-B (c = 0.25). Two nodal
+    densities with the same support radius d_mI = scale sqrt(2) h: spacing h (scale factor
+    ``scale``) and h/2 (twice the scale factor), so the dense grid holds about four times
+    as many nodes in a support. At one scale factor a refined grid only shrinks the
+    supports with the spacing (d_mI follows the 8th-nearest-node distance) and the curves
+    in x/h would not change. x is normalised by the coarse spacing h; nodes on the line
+    are ticked along the bottom of each panel. The exponential weights are only C0 at
+    r = 1, so their dphi/dx jumps where the line crosses the edge of a node's support.
+    """
+    from soilwater.efg.mls import ShapeFunctions
+
+    weights = {"Q": "Q (quartic)", "E-A": "E-A (exp, c = 0.5)", "E-B": "E-B (exp, c = 0.25)"}
+    centre = 6.0  # grid over [0, 12 h]^2: boundary nodes' larger supports stay clear of I
+    x = np.linspace(-2.4, 2.4, 961)
+    line = np.column_stack([x + centre, np.full_like(x, centre)])
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5), sharex=True, sharey="row",
+                             constrained_layout=True)
+    for column, spacing in enumerate((1.0, 0.5)):
+        ticks = np.linspace(0.0, 2 * centre, int(round(2 * centre / spacing)) + 1)
+        nodes = np.stack(np.meshgrid(ticks, ticks), axis=-1).reshape(-1, 2)
+        node = int(np.argmin(np.linalg.norm(nodes - centre, axis=1)))
+        factor = scale / spacing
+        for name, label in weights.items():
+            sf = ShapeFunctions.build(nodes, line, name, factor)
+            axes[0, column].plot(x, sf.phi[:, [node]].toarray(), lw=1.8, label=label)
+            axes[1, column].plot(x, sf.dphi_dx[:, [node]].toarray(), lw=1.8, label=label)
+        radius = sf.support[node]
+        inside = int(np.sum(np.linalg.norm(nodes - nodes[node], axis=1) < radius))
+        axes[0, column].set_title(f"nodal spacing {'h' if spacing == 1 else 'h/2'}, scale "
+                                  f"factor {factor:g}\n{inside} nodes in the support "
+                                  f"(radius d$_{{mI}}$ = {radius:.2f} h)", fontsize=10)
+        for ax in axes[:, column]:
+            ax.axhline(0.0, color="0.6", lw=0.6)
+            for edge in (-radius, radius):
+                ax.axvline(edge, color="0.4", ls=":", lw=1)
+            on_line = ticks[np.abs(ticks - centre) <= 2.4] - centre
+            ax.plot(on_line, np.zeros_like(on_line), "|", color="k", ms=9,
+                    transform=ax.get_xaxis_transform(), label="node on the line")
+            ax.grid(alpha=0.3)
+        axes[1, column].set_xlabel("(x - x$_I$)/h  (h: coarse nodal spacing)")
+    axes[0, 0].set_ylabel("shape function $\\phi_I$")
+    axes[1, 0].set_ylabel("h d$\\phi_I$/dx")
+    axes[0, 0].plot([], [], ":", color="0.4", label="support edge, |x - x$_I$| = d$_{mI}$")
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    axes[0, 0].legend(handles[:5], labels[:5], loc="upper left", fontsize=9)
+    fig.suptitle("Paper Fig. 7: MLS shape function (linear basis) of an interior node I "
+                 "and its x-derivative along y = y$_I$\nsame support radius in both "
+                 "columns, the right one with twice the nodal density")
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def efg_convergence(table, path):
+    """Energy-norm error of the cantilever against nodal spacing, log-log, per weight/cells.
+
+    ``table`` is :func:`soilwater.studies.verification.study.cantilever_convergence`.
+    """
+    fig, ax = plt.subplots(figsize=(6.4, 4.6), constrained_layout=True)
+    styles = {"delaunay": "-", "squares": "--"}
+    colours = {"Q": "C0", "E-A": "C1", "E-B": "C2"}
+    for (weight, cells), group in table.groupby(["weight", "cells"], sort=False):
+        ax.loglog(group.h, group.energy, styles[cells], marker="o", color=colours[weight],
+                  label=f"{weight}, {cells} cells")
+    h = np.array([table.h.min(), table.h.max()])
+    e = table.energy.min() * (h / h[0])
+    ax.loglog(h, e, "k:", lw=1, label="slope 1")
+    ax.set(xlabel="nodal spacing h (m), beam 48 x 12", ylabel="relative energy-norm error",
+           title="EFG cantilever (Timoshenko beam), plane strain, VCI")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8, ncol=2)
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def stress_paths(table, path):
+    """Paper Fig. 4: q/p'0 against p'/p'0 of every run and the driver, one panel per case.
+
+    ``table`` is :func:`soilwater.studies.verification.study.stress_paths`.
+    """
+    cases = list(dict.fromkeys(table.case))
+    fig, axes = plt.subplots(1, len(cases), figsize=(5.6 * len(cases), 4.8),
+                             constrained_layout=True, squeeze=False)
+    for ax, case in zip(axes[0], cases):
+        part = table[table.case == case]
+        first = part[part.run == part.run.iloc[0]]
+        ax.plot(np.r_[1.0, first.p_driver], np.r_[0.0, first.q_driver], "k-", lw=4,
+                alpha=0.3, label="stress-point driver (theory)")
+        for k, (run, group) in enumerate(part.groupby("run", sort=False)):
+            ax.plot(np.r_[1.0, group.p], np.r_[0.0, group.q], lw=1.3, label=run, **_style(k))
+        ax.set(xlabel="p'/p'$_0$", ylabel="q/p'$_0$", xlim=(0.45, 1.05), ylim=(0, 0.85),
+               title=f"{case}: stress path (nodal or domain averages)")
+        ax.grid(alpha=0.3)
+    axes[0][-1].legend(fontsize=8, loc="upper right")
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def err_history(table, path, case="unconfined-compression"):
+    """Paper Fig. 6: ERR (eq. 1) against axial strain for every run of ``case``."""
+    part = table[table.case == case]
+    fig, ax = plt.subplots(figsize=(6.6, 4.6), constrained_layout=True)
+    for k, (run, group) in enumerate(part.groupby("run", sort=False)):
+        ax.semilogy(group.strain * 100, group.err.clip(lower=1e-12), lw=1.3, label=run,
+                    **_style(k))
+    ax.set(xlabel="axial strain (%)", ylabel="ERR (paper eq. 1), floor 1e-12",
+           title="Unconfined compression: error of the nodal stretching D$_{22}$")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def _style(k):
+    """Line style of the k-th run: colours for cells/methods, dashes for variants."""
+    ls, color = [("-", "C0"), ("--", "C1"), (":", "C0"), (":", "C1"), ("-", "C2"),
+                 ("-.", "C3")][k % 6]
+    return {"ls": ls, "color": color}
+
+
+def column_profiles(table, path):
+    """Pore pressure along the column after the first step, one panel per run."""
+    runs = list(dict.fromkeys(table.run))
+    cols = 4
+    rows = -(-len(runs) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 4.2 * rows), sharey=True,
+                             constrained_layout=True, squeeze=False)
+    for ax, run in zip(axes.flat, runs):
+        part = table[table.run == run]
+        ax.plot(part.reference, part.y, "k-", lw=3, alpha=0.3, label="Terzaghi, initial "
+                "stiffness")
+        ax.plot(part.p_w, part.y, "o-", ms=3, color="C3", label="p$_w$ on the axis")
+        ax.set(title=run, xlabel="p$_w$ / load", xlim=(-0.6, 2.2))
+        ax.axvline(1.0, color="k", lw=0.5, ls=":")
+        ax.grid(alpha=0.3)
+    for ax in axes.flat[len(runs):]:
+        ax.set_visible(False)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("height y (m)")
+    axes.flat[0].legend(fontsize=7, loc="lower left")
+    fig.suptitle("Soil column (paper Fig. 8), first step of 40 s: h$^2$/(c$_v$ dt) = 30")
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def consolidation(terzaghi_table, mandel_table, path, times=(0.1, 0.5, 1.0, 3.0)):
+    """Verification: Terzaghi isochrones and Mandel's centre pressure, EFG and FEM.
+
+    Tables from :func:`soilwater.studies.verification.study.consolidation_histories`.
+    """
+    from soilwater.studies.verification.study import mandel_centre
+    from soilwater.references.closed_forms import terzaghi as series
+    from soilwater.references.closed_forms import undrained_pressure
+    from soilwater.case.loader import load_case
+
+    case = load_case("terzaghi")
+    material, fluid, height = case.material(), case.fluid, case.geometry.height
+    args = (height, material.constrained_modulus(), fluid.biot_alpha, fluid.storage,
+            fluid.mobility)
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.6), constrained_layout=True)
+    y = np.linspace(0, height, 101)
+    p0 = undrained_pressure(1.0, *args[1:4])                                # unit load
+    markers = {"EFG (5 x 41 nodes)": "o", "fem-q1q1": "s", "fem-th": "^",
+               "MOOSE Q1/Q1 (peer)": "x"}
+    for k, t in enumerate(times):
+        exact, _ = series(y, t, 1.0, *args)
+        left.plot(exact / p0, y, "-", color=f"C{k}", lw=2, alpha=0.4,
+                  label=f"closed form, t = {t:g}")
+        for run, marker in markers.items():
+            part = terzaghi_table[terzaghi_table.run == run]
+            nearest = part.time.iloc[np.argmin(np.abs(part.time.to_numpy() - t))]
+            at = part[part.time == nearest]
+            left.plot(at.p, at.y, marker, color=f"C{k}", ms=4, mfc="none",
+                      label=run if k == 0 else None)
+    left.set(xlabel="p$_w$ / p$_0$ (undrained)", ylabel="height above the base (m)",
+             title="Terzaghi (peer case A): isochrones")
+    left.legend(fontsize=7, loc="lower left")
+    for k, (run, part) in enumerate(mandel_table.groupby("run", sort=False)):
+        right.semilogx(part.time, part.p_centre, ["o", "s", "^"][k % 3], ms=3, mfc="none",
+                       label=run)
+    fine = np.geomspace(mandel_table.time.min(), mandel_table.time.max(), 400)
+    right.semilogx(fine, mandel_centre(fine), "k-", lw=2, alpha=0.5, label="closed form")
+    right.axhline(1.0, color="k", lw=0.5, ls=":")
+    right.set(xlabel="time (s)", ylabel="p$_w$ at the centre / (F / 2a)",
+              title="Mandel: the Mandel-Cryer rise above the undrained value")
+    right.legend(fontsize=8)
+    for ax in (left, right):
+        ax.grid(alpha=0.3, which="both")
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def problems(path, names=("unconfined-compression", "soil-column")):
+    """Paper Figs. 3 and 8: nodes and boundary conditions of the two problems.
+
+    Edges are drawn by their condition: fixed components as ticks across (ux) or along
+    (uy) the edge, prescribed motion as arrows of L x, tractions as arrows, drained edges
+    in blue.
+    """
+    from soilwater.case.loader import load_case
+
+    fig, axes = plt.subplots(1, len(names), figsize=(9, 5.6), constrained_layout=True,
+                             gridspec_kw={"width_ratios": [1.3, 1]})
+    for ax, name in zip(axes, names):
+        case = load_case(name)
+        nodes, loop = case.nodes(), case.boundary_loop()
+        ring = nodes[np.r_[loop, loop[:1]]]
+        ax.plot(ring[:, 0], ring[:, 1], "k-", lw=1)
+        ax.plot(nodes[:, 0], nodes[:, 1], "o", ms=3, color="0.3")
+        size = 0.06 * max(case.geometry.width, case.geometry.height)
+        for edge_name, edge in case.boundary.items():
+            _edge(ax, case, edge_name, edge, size)
+        ax.set_aspect("equal")
+        ax.set(title=f"{name}: {len(nodes)} nodes", xlabel="x (m)", ylabel="y (m)")
+        ax.margins(0.12)
+    handles = [plt.Line2D([], [], color="C3", marker="|", ls="none", ms=8, label="fixed "
+                          "component"),
+               plt.Line2D([], [], color="C2", marker=">", ls="none", label="prescribed v = L x"),
+               plt.Line2D([], [], color="C1", marker="v", ls="none", label="traction"),
+               plt.Line2D([], [], color="C0", lw=3, label="drained (p$_w$ = 0)")]
+    fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8)
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def _edge(ax, case, name, edge, size):
+    """Draw one edge's conditions (see :func:`problems`)."""
+    W, H = case.geometry.width, case.geometry.height
+    along = {"left": ([0, 0], [0, H]), "right": ([W, W], [0, H]),
+             "bottom": ([0, W], [0, 0]), "top": ([0, W], [H, H])}[name]
+    xs = np.linspace(*along[0], 7)[1:-1]
+    ys = np.linspace(*along[1], 7)[1:-1]
+    if edge.drained:
+        ax.plot(*along, color="C0", lw=3, alpha=0.7)
+    for f, kind in enumerate((edge.ux, edge.uy)):
+        if kind == "fixed":
+            dx, dy = (size / 2, 0) if f == 0 else (0, size / 2)
+            for x, y in zip(xs, ys):
+                ax.plot([x - dx, x + dx], [y - dy, y + dy], color="C3", lw=1.5)
+        elif kind == "prescribed":
+            v = np.stack([xs, ys], 1) @ case.loading.L.T
+            v = v / max(np.abs(v).max(), 1e-300) * size * 1.5
+            ax.quiver(xs, ys, v[:, 0] * (f == 0), v[:, 1] * (f == 1), color="C2",
+                      angles="xy", scale_units="xy", scale=1, width=0.006)
+    if edge.traction != "exact" and np.any(edge.traction):
+        t = np.asarray(edge.traction, float)
+        t = t / np.abs(t).max() * size * 1.5
+        ax.quiver(xs - t[0], ys - t[1], t[0] + 0 * xs, t[1] + 0 * ys, color="C1",
+                  angles="xy", scale_units="xy", scale=1, width=0.02)
+
+
+def uniqueness(members, continuum, path):
+    """The discrete uniqueness indicator of every run against strain, with the continuum
+    (Rudnicki-Rice) indicator along the driver's path; symmetric-log axis (both cross
+    zero by a few 1e-4 of the modulus)."""
+    fig, ax = plt.subplots(figsize=(7.2, 4.8), constrained_layout=True)
+    ax.plot(continuum.strain * 100, continuum.indicator, "k-", lw=4, alpha=0.3,
+            label="continuum (acoustic tensor), driver path")
+    base = members[members.jitter == 0]
+    for k, (run, group) in enumerate(base.groupby("run", sort=False)):
+        first = group[group.solver == group.solver.iloc[0]]
+        ax.plot(first.strain * 100, first.uniqueness, lw=1.3, label=run, **_style(k))
+    ax.axhline(0.0, color="k", lw=0.6)
+    ax.set_yscale("symlog", linthresh=1e-4)
+    ax.set(xlabel="axial strain (%)", ylabel="smallest eigenvalue / P-wave modulus",
+           title="Unconfined compression: uniqueness of the undrained solution\n"
+           "(discrete: tangent on the undrained constraint; below zero uniqueness is not "
+           "guaranteed)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def bifurcation_ensemble(members, summary, path):
+    """ERR of every ensemble member (jittered nodes, both linear solvers) per run: the
+    band between the smallest and the largest member, the members as thin lines, the
+    discrete and continuum onsets as vertical lines."""
+    runs = list(dict.fromkeys(members.run))
+    fig, axes = plt.subplots(2, -(-len(runs) // 2), figsize=(12, 6.8), sharex=True,
+                             sharey=True, constrained_layout=True, squeeze=False)
+    onsets = summary.set_index("run")
+    for ax, run in zip(axes.T.flat, runs):
+        part = members[members.run == run]
+        band = part.groupby("step").agg(strain=("strain", "mean"), low=("err", "min"),
+                                        high=("err", "max"))
+        ax.fill_between(band.strain * 100, band.low.clip(lower=1e-9),
+                        band.high.clip(lower=1e-9), color="C0", alpha=0.25,
+                        label="ensemble band")
+        for (jitter, solver), m in part.groupby(["jitter", "solver"]):
+            ax.plot(m.strain * 100, m.err.clip(lower=1e-9), lw=0.7,
+                    color="C1" if solver == "pardiso" else "C0",
+                    ls={0.0: "-", 1e-12: "--", 1e-9: "-.", 1e-6: ":"}.get(jitter, "-"))
+        row = onsets.loc[run]
+        if np.isfinite(row.onset):
+            ax.axvline(row.onset * 100, color="C3", lw=1, label="discrete onset")
+        ax.axvline(row.continuum_onset * 100, color="k", lw=1, ls=":",
+                   label="continuum onset")
+        ax.set_yscale("log")
+        ax.set(title=run, ylim=(1e-9, 10))
+        ax.grid(alpha=0.3, which="both")
+    for ax in axes.flat[len(runs):]:
+        ax.set_visible(False)
+    for ax in axes[-1]:
+        ax.set_xlabel("axial strain (%)")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("ERR (paper eq. 1), floor 1e-9")
+    labels = {}
+    for ax in axes.flat:
+        labels.update(zip(*reversed(ax.get_legend_handles_labels())))
+    fig.legend(list(labels.values()), list(labels), loc="outside lower center", fontsize=8,
+               ncols=3)
+    fig.suptitle("Unconfined compression: ERR of every ensemble member (blue SuperLU, "
+                 "orange PARDISO; line style: node jitter 0, 1e-12, 1e-9, 1e-6 of the "
+                 "spacing)", fontsize=10)
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+

@@ -1,0 +1,234 @@
+"""Run cases with several methods and settings: a sweep, in parallel, cached.
+
+A :class:`Job` names a case (built-in or TOML file), a method and ``--set`` overrides.
+:func:`run` executes jobs in a local process pool (one worker per core by default) or on a
+Dask distributed scheduler (``dask=ADDRESS``, optional extra ``soilwater[dask]``), and
+returns one :class:`Outcome` per job, in order. A job that fails is an outcome with its
+error; the others complete.
+
+Results are cached on disk under a key hashing the resolved case, the method, the linear
+solver (name and version, :func:`soilwater.linalg.backends.identity`) and the source code of the solvers
+(so any change to ``soil/``, ``efg/`` or ``fem_reference/`` invalidates the cache):
+rerunning a report only recomputes what changed, and a result made with one linear solver
+is never reused for another.
+"""
+
+import hashlib
+import json
+import os
+import pickle
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from functools import cache
+from pathlib import Path
+
+import pandas as pd
+from tqdm import tqdm
+
+from soilwater.fem.spaces import PAIRS
+from soilwater.errors import SoilwaterError
+from soilwater.linalg.backends import identity, linear_solver
+from soilwater.case.loader import load_case
+
+from soilwater.studies.harness.paths import CACHE, PACKAGE
+#: Scheduler address for every sweep of this process (``--dask ADDRESS``), or None.
+DASK = {"address": None}
+#: Jobs run and jobs read from the cache in this process (the report states them).
+COUNTS = {"runs": 0, "cached": 0}
+
+
+@dataclass(frozen=True)
+class Job:
+    """One run: a case, a method, overrides ``("section.key=value", ...)`` and the linear
+    solver (``"pardiso"``, ``"superlu"`` or None for :func:`soilwater.linalg.backends.backend`'s choice)."""
+
+    case: str
+    method: str
+    overrides: tuple = ()
+    labels: tuple = field(default=(), compare=False)
+    linear_solver: str | None = None
+
+    def key(self):
+        """Cache key: the resolved case, the method, the linear solver and the code."""
+        with linear_solver(self.linear_solver):
+            solver = identity()
+        spec = {"case": load_case(self.case, self.overrides).to_dict(),
+                "method": self.method, "linear_solver": solver,
+                "code": code_version(self.method)}
+        return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:24]
+
+
+@dataclass
+class Outcome:
+    """What a job gave: its Result or its error, the wall time and whether it was cached."""
+
+    job: Job
+    result: object = None
+    error: str | None = None
+    seconds: float = 0.0
+    cached: bool = False
+
+    @property
+    def ok(self):
+        return self.error is None
+
+
+def _efg(case, progress=True):
+    """EFG: static elasticity for ``analysis = "static"``, else the coupled solver."""
+    if case.analysis == "static":
+        from soilwater.efg.statics import solve
+
+        return solve(case)
+    from soilwater.efg.solver import solve
+
+    return solve(case, progress=progress)
+
+
+def _fem(method):
+    """The scikit-fem reference with one element pair."""
+    def solve(case, progress=True):
+        from soilwater.fem.solver import solve
+
+        return solve(case, method, progress)
+
+    return solve
+
+
+#: Solvers by method name: ``(case, progress=True) -> Result``.
+METHODS = {"efg": _efg, **{name: _fem(name) for name in PAIRS}}
+#: The source folders each method's results depend on (``efg`` and ``fem_reference``
+#: import :mod:`soil`, never each other), hashed into the cache key.
+#: The package folders a method's solver is made of, besides the shared library (every
+#: module outside ``efg/``, ``fem/`` and ``studies/``).
+SOURCES = {"efg": ("efg",), **{name: ("fem",) for name in PAIRS}}
+_APART = ("efg", "fem", "studies")
+
+
+def solver(method):
+    """The solver of a method name: ``case -> Result``."""
+    if method not in METHODS:
+        raise SoilwaterError(f"unknown method {method!r}: use one of {', '.join(METHODS)}")
+    return METHODS[method]
+
+
+def execute(job, cache_dir=CACHE):
+    """Run one job (or read it from the cache); never raises for a failing case."""
+    tic = time.perf_counter()
+    try:
+        path = Path(cache_dir) / f"{job.key()}.pkl" if cache_dir else None
+        cached = _read_cache(path)
+        if cached is not None:
+            return Outcome(job, cached, None, time.perf_counter() - tic, True)
+        case = load_case(job.case, job.overrides)
+        with linear_solver(job.linear_solver):
+            result = solver(job.method)(case, progress=False)
+        _write_cache(path, result)
+        return Outcome(job, result, None, time.perf_counter() - tic, False)
+    except (SoilwaterError, ArithmeticError, ValueError) as err:
+        return Outcome(job, None, f"{type(err).__name__}: {err}", time.perf_counter() - tic)
+
+
+def _read_cache(path):
+    """A cached Result, or None (no cache, no entry, or a cache this worker cannot read)."""
+    try:
+        with path.open("rb") as fh:
+            return pickle.load(fh)
+    except (AttributeError, OSError, pickle.UnpicklingError, EOFError):
+        return None
+
+
+def _write_cache(path, result):
+    """Store a Result; a cache this worker cannot write (a remote Dask worker) is skipped."""
+    if path is None:
+        return
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        with tmp.open("wb") as fh:
+            pickle.dump(result, fh)
+        os.replace(tmp, path)
+    except OSError:
+        pass
+
+
+def run(jobs, workers=None, dask=None, cache_dir=CACHE, progress=True, desc="sweep"):
+    """Execute jobs and return their outcomes in order.
+
+    Parameters
+    ----------
+    jobs : list of Job
+    workers : int, optional
+        Local processes (default: the number of cores; 1 runs in this process).
+    dask : str, optional
+        Address of a Dask distributed scheduler; the same jobs go there instead
+        (default: :data:`DASK`, which ``soilwater report --dask ADDRESS`` sets).
+    cache_dir : path or None
+        Where results are cached (None: no cache).
+    progress : bool
+        A progress bar over the jobs.
+    """
+    jobs, dask = list(jobs), dask or DASK["address"]
+    bar = tqdm(total=len(jobs), desc=desc, unit="run", disable=not progress or None,
+               leave=False)
+    if dask is not None:
+        outcomes = _run_dask(jobs, dask, cache_dir, bar)
+    elif (workers or os.cpu_count()) == 1 or len(jobs) == 1:
+        outcomes = []
+        for job in jobs:
+            outcomes.append(execute(job, cache_dir))
+            bar.update()
+    else:
+        with ProcessPoolExecutor(max_workers=workers or os.cpu_count()) as pool:
+            futures = [pool.submit(execute, job, cache_dir) for job in jobs]
+            outcomes = []
+            for future in futures:
+                outcomes.append(future.result())
+                bar.update()
+    bar.close()
+    COUNTS["runs"] += len(outcomes)
+    COUNTS["cached"] += sum(o.cached for o in outcomes)
+    return outcomes
+
+
+def _run_dask(jobs, address, cache_dir, bar):
+    try:
+        from dask.distributed import Client, as_completed
+    except ImportError:
+        raise SoilwaterError("a Dask sweep needs the optional extra: pip install "
+                             "'soilwater[dask]'") from None
+    with Client(address) as client:
+        futures = client.map(execute, jobs, cache_dir=cache_dir, pure=False)
+        for _ in as_completed(futures):
+            bar.update()
+        return client.gather(futures)
+
+
+def table(outcomes):
+    """One row per outcome: labels, case, method, overrides, status, error, seconds."""
+    rows = []
+    for o in outcomes:
+        summary = o.result.summary if o.ok else {}
+        rows.append({**dict(o.job.labels), "case": o.job.case, "method": o.job.method,
+                     "overrides": " ".join(o.job.overrides),
+                     "status": "ok" if o.ok else "failed", "error": o.error or "",
+                     "seconds": round(o.seconds, 3), "cached": o.cached,
+                     "steps": summary.get("steps"),
+                     "newton_iterations": summary.get("newton_iterations")})
+    return pd.DataFrame(rows)
+
+
+@cache
+def code_version(method):
+    """Hash of the package version and the source files ``method`` depends on
+    (:data:`SOURCES`): a change to EFG's code leaves FEM's cached runs valid, and the
+    reverse."""
+    from importlib.metadata import version
+
+    digest = hashlib.sha256(version("soilwater").encode())
+    shared = [path for path in sorted(PACKAGE.rglob("*.py"))
+              if path.relative_to(PACKAGE).parts[0] not in _APART]
+    own = [path for folder in SOURCES[method] for path in sorted((PACKAGE / folder).rglob("*.py"))]
+    for path in shared + own:
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
