@@ -14,7 +14,7 @@ from soilwater.efg.quadrature import background
 from soilwater.material.camclay import CamClay
 from soilwater.material.elastic import LinearElastic
 from soilwater.errors import InputError
-from soilwater.case.model import EDGES
+from soilwater.case.boundary import EDGES
 from soilwater.case.loader import builtin_cases, load_case
 from soilwater.case.schema import MAX_TRIANGLE_ORDER, SCALES
 from soilwater.efg.settings import DEFAULT_SCALE, Weight

@@ -6,7 +6,7 @@ import pytest
 
 from soilwater.material.elastic import LinearElastic
 from soilwater.material.kinematics import in_plane, spatial_tangent, strain_increment
-from soilwater.case.model import Fluid
+from soilwater.material.fluid import Fluid
 from soilwater.physics import weakform
 
 FLUID = Fluid(permeability=1e-4, gamma_w=10.0, biot_alpha=0.8, storage=1e-3)

@@ -5,6 +5,11 @@ file) or :func:`soilwater.case.validation.case_from_dict`; its TOML layout, defa
 bounds are documented in :mod:`soilwater.case.schema`. Units are those of the case (kPa, m, s in the
 built-in cases).
 
+The parts live where their concept does: the boundary conditions (:class:`Boundary`,
+:class:`~soilwater.case.boundary.Edge`, :class:`~soilwater.case.boundary.Segment`) in
+:mod:`soilwater.case.boundary`, the pore fluid (:class:`~soilwater.material.fluid.Fluid`)
+in :mod:`soilwater.material.fluid`.
+
 Conventions: x to the right, y up, origin at the lower-left corner of the rectangle;
 stress and traction are tension positive (a traction ``[0, -1]`` on the top edge is a
 compressive load); pore water pressure p_w is compression positive;
@@ -16,25 +21,17 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from soilwater.references.closed_forms import exact_solution
-from soilwater.errors import require
-from soilwater.material.presets import material_from_spec
+from soilwater.case.boundary import SEGMENT_TOLERANCE, Boundary, along
+from soilwater.case.grid import Discretisation, grid_line
 from soilwater.efg.settings import EFGSettings
+from soilwater.errors import require
 from soilwater.fem.settings import FEMSettings
+from soilwater.material.fluid import Fluid
+from soilwater.material.presets import material_from_spec
+from soilwater.references.closed_forms import exact_solution
 
-EDGES = ("left", "right", "bottom", "top")
-KINDS = ("free", "fixed", "prescribed", "rigid", "exact")
-SEGMENT_KINDS = {"ux": ("free", "fixed", "prescribed"),
-                 "uy": ("free", "fixed", "prescribed", "footing")}
-"""The kinds a named segment of an edge (:class:`Segment`) accepts per component."""
-WATER = ("drained", "impermeable")
-LAYOUTS = ("grid", "grid+centres")
 ANALYSES = ("coupled", "static")
-SEGMENT_TOLERANCE = 1e-9
-"""A point within this fraction of the smallest grid spacing of a segment's end belongs to
-the segment (:meth:`Case.edge_conditions`)."""
 ON_FAILURE = ("error", "stop")
-PERMEABILITY_LAWS = ("constant", "taylor", "kozeny-carman")
 STRESS_STARTS = ("uniform", "geostatic")
 MAX_STEPS = 100_000
 """Largest number of time steps of a case (``time.steps``, or geometric steps to the end)."""
@@ -50,125 +47,10 @@ class Geometry:
 
 
 @dataclass(frozen=True)
-class Discretisation:
-    """Grid of ``nx x ny`` nodes, optionally plus one node per cell centre.
-
-    The grid lines are regular, or, where ``x`` (``y``) is given, laid out piece by piece
-    along x (y): each piece ``(to, spacings, ratio)`` runs from the end of the previous
-    one (0 for the first) to ``to`` [m] in ``spacings`` grid spacings, the last of which is
-    ``ratio`` times the first, growing geometrically in between (1: equal spacings).
-    ``((1.0, 16, 1.0), (20.0, 24, 30.0))`` is 16 equal spacings over the first metre, then
-    24 growing thirty-fold to 20 m: fine where a footing sits, coarse far from it. ``nx``
-    (``ny``) is then one more than the pieces' spacings.
-
-    ``jitter`` moves every interior node by a uniform random offset of up to ``jitter``
-    times the smallest grid spacing in each direction (boundary nodes stay on their
-    edges), drawn with ``numpy.random.default_rng(seed)``: a perturbation of the node set,
-    used to probe how a result depends on round-off-sized changes of the geometry.
-    """
-
-    nx: int
-    ny: int
-    layout: str = "grid"
-    jitter: float = 0.0
-    seed: int = 0
-    x: tuple[tuple[float, int, float], ...] = ()
-    y: tuple[tuple[float, int, float], ...] = ()
-
-    @property
-    def regular(self):
-        """True when the grid lines are equally spaced along both axes (no pieces)."""
-        return not (self.x or self.y)
-
-    def to_dict(self):
-        """The ``[discretisation]`` table: ``x`` (``y``) instead of ``nx`` (``ny``) where
-        the grid is laid out in pieces."""
-        data = {k: v for k, v in asdict(self).items() if k not in ("x", "y")}
-        for axis in ("x", "y"):
-            if getattr(self, axis):
-                data.pop(f"n{axis}")
-                data[axis] = getattr(self, axis)
-        return data
-
-
-def grid_line(length, n, pieces=()):
-    """Grid coordinates [m] on ``[0, length]``: ``n`` equally spaced, or laid out by
-    ``pieces`` ``(to, spacings, ratio)`` (:class:`Discretisation`).
-
-    Examples
-    --------
-    >>> grid_line(1.0, 3).tolist()
-    [0.0, 0.5, 1.0]
-    >>> grid_line(8.0, 5, ((1.0, 1, 1.0), (8.0, 3, 4.0))).tolist()
-    [0.0, 1.0, 2.0, 4.0, 8.0]
-    """
-    if not pieces:
-        return np.linspace(0.0, length, n)
-    lines, start = [[0.0]], 0.0
-    for to, spacings, ratio in pieces:
-        steps = ratio ** (np.arange(spacings) / max(spacings - 1, 1))
-        lines.append(start + (to - start) * np.cumsum(steps) / steps.sum())
-        lines[-1][-1] = start = to
-    return np.concatenate(lines)
-
-
-@dataclass(frozen=True)
 class Diagnostics:
     """Optional per-step measurements: ``uniqueness`` (:mod:`soilwater.diagnostics.bifurcation`)."""
 
     uniqueness: bool = False
-
-
-@dataclass(frozen=True)
-class Fluid:
-    """Pore fluid and coupling: permeability k [m/s] and its law, gamma_w [kN/m3], Biot
-    alpha, S [1/kPa], and the specific gravity Gs of the solids (their weight under
-    gravity).
-
-    The Darcy mobility entering the continuity equation is ``k / gamma_w``. With
-    ``permeability_law = "constant"`` k is ``permeability``; otherwise it falls with the
-    void ratio e (:meth:`mobility_at`): Taylor's ``k = k_ref 10^((e - e_k) / C_k)`` or
-    Kozeny-Carman's ``k = k_ref (e^3 / (1 + e)) / (e_k^3 / (1 + e_k))``, with ``k_ref =
-    permeability``, ``e_k = permeability_e`` and ``C_k = permeability_ck``.
-    """
-
-    permeability: float = 0.0
-    gamma_w: float = 9.81
-    biot_alpha: float = 1.0
-    storage: float = 0.0
-    permeability_law: str = "constant"
-    permeability_e: float | None = None
-    permeability_ck: float | None = None
-    specific_gravity: float = 2.65
-
-    @property
-    def mobility(self):
-        """``k / gamma_w`` [m2/(kPa s)] at the reference void ratio (``k_ref``)."""
-        return self.permeability / self.gamma_w
-
-    def mobility_at(self, v):
-        """``k(e) / gamma_w`` [m2/(kPa s)] and its derivative with respect to the specific
-        volume ``v = 1 + e``, at each point.
-
-        Examples
-        --------
-        Taylor's law falls tenfold per ``C_k`` of void ratio:
-
-        >>> fluid = Fluid(permeability=1e-8, permeability_law="taylor",
-        ...               permeability_e=1.0, permeability_ck=0.5)
-        >>> k, dk = fluid.mobility_at(np.array([2.0, 1.5]))
-        >>> [round(float(x), 6) for x in k * fluid.gamma_w / 1e-8]
-        [1.0, 0.1]
-        """
-        v = np.asarray(v, dtype=float)
-        if self.permeability_law == "constant":
-            return np.full_like(v, self.mobility), np.zeros_like(v)
-        e, e_k = v - 1.0, self.permeability_e
-        if self.permeability_law == "taylor":
-            k = self.mobility * 10.0 ** ((e - e_k) / self.permeability_ck)
-            return k, k * np.log(10.0) / self.permeability_ck
-        k = self.mobility * (e**3 / v) / (e_k**3 / (1.0 + e_k))
-        return k, k * (3.0 / e - 1.0 / v)
 
 
 @dataclass(frozen=True)
@@ -204,152 +86,6 @@ class Initial:
         if self.stress == "uniform":
             return {"pore_pressure": self.pore_pressure}
         return {k: v for k, v in asdict(self).items() if v is not None}
-
-
-@dataclass(frozen=True)
-class Segment:
-    """A named part ``[start, end]`` of an edge with its own displacement kinds.
-
-    ``start`` and ``end`` (TOML ``from`` and ``to``) [m] are the coordinate along the edge
-    in the initial configuration: x on the top and bottom edges, y on the left and right.
-    A boundary point (EFG) or DOF (FEM) whose initial coordinate lies in ``[start, end]``
-    takes the segment's kinds; the segment carries no traction.
-
-    ``uy = "footing"`` makes the segment a rigid strip footing whose uy moves as one body:
-    either velocity control, ``settlement_rate`` [m/s, positive down] (uy = -rate x t on
-    the segment), or load control, ``force`` [kN/m per unit thickness, compression
-    positive] times the load factor ``loading.load`` at t, carried by one unknown
-    settlement (the machinery of the ``rigid`` plate). ``ux = "fixed"`` is a rough footing
-    (no sideways motion), ``ux = "free"`` a smooth one. ``water`` None keeps the edge's
-    water condition.
-    """
-
-    name: str
-    start: float
-    end: float
-    ux: str = "free"
-    uy: str = "free"
-    water: str | None = None
-    settlement_rate: float | None = None
-    force: float | None = None
-
-    @property
-    def footing(self):
-        """True for a rigid footing (``uy = "footing"``)."""
-        return self.uy == "footing"
-
-    @property
-    def load_controlled(self):
-        """True for a footing carrying a prescribed force (one unknown settlement)."""
-        return self.footing and self.force is not None
-
-    @property
-    def uy_kind(self):
-        """The uy kind the solvers apply: ``rigid`` for a load-controlled footing (the
-        plate unknown), ``footing`` for a velocity-controlled one, else ``uy``."""
-        return "rigid" if self.load_controlled else self.uy
-
-    def contains(self, s, tol=0.0):
-        """(P,) bool: coordinates along the edge ``s`` [m] within ``[start, end]`` +- tol."""
-        s = np.asarray(s, float)
-        return (s >= self.start - tol) & (s <= self.end + tol)
-
-    def to_dict(self):
-        """The segment's TOML table (``from``, ``to``, its kinds and footing data)."""
-        data = {"from": self.start, "to": self.end, "ux": self.ux, "uy": self.uy,
-                "water": self.water, "settlement_rate": self.settlement_rate,
-                "force": self.force}
-        return {k: v for k, v in data.items() if v is not None}
-
-
-@dataclass(frozen=True)
-class Edge:
-    """Conditions on one edge: kinds of ux and uy, total traction [kPa], water condition,
-    and named segments (:class:`Segment`) that override the kinds on parts of it."""
-
-    ux: str = "free"
-    uy: str = "free"
-    traction: tuple[float, float] = (0.0, 0.0)
-    water: str = "impermeable"
-    segments: tuple[Segment, ...] = ()
-
-    @property
-    def drained(self):
-        """True if p_w = 0 is imposed on the edge."""
-        return self.water == "drained"
-
-    def at(self, s, tol=0.0):
-        """The conditions at coordinates ``s`` along the edge (initial configuration).
-
-        Parameters
-        ----------
-        s : array_like, shape (P,)
-            Coordinate along the edge [m]: x on top and bottom, y on left and right.
-        tol : float
-            Points within ``tol`` [m] of a segment's ends belong to it.
-
-        Returns
-        -------
-        kind : ndarray of str, shape (P, 2)
-            ux and uy kinds; a load-controlled footing's uy is ``rigid`` and a
-            velocity-controlled one's ``footing`` (:attr:`Segment.uy_kind`).
-        drained : ndarray of bool, shape (P,)
-        segment : ndarray of int, shape (P,)
-            Index into :attr:`segments` of each point's segment, -1 for the bare edge.
-        """
-        s = np.atleast_1d(np.asarray(s, float))
-        kind = np.tile(np.array([self.ux, self.uy], dtype=object), (len(s), 1))
-        drained = np.full(len(s), self.drained)
-        segment = np.full(len(s), -1)
-        for k, seg in enumerate(self.segments):
-            inside = seg.contains(s, tol)
-            kind[inside] = (seg.ux, seg.uy_kind)
-            if seg.water is not None:
-                drained[inside] = seg.water == "drained"
-            segment[inside] = k
-        return kind.astype(str), drained, segment
-
-    def kinds(self, length):
-        """The kinds that occur on the edge of ``length`` [m]: ``(ux kinds, uy kinds)``,
-        two sets (the edge's own ones unless its segments cover it whole; a footing's uy
-        as :attr:`Segment.uy_kind`)."""
-        ux, uy = {seg.ux for seg in self.segments}, {seg.uy_kind for seg in self.segments}
-        reach, covered = 0.0, bool(self.segments)
-        for a, b in sorted((seg.start, seg.end) for seg in self.segments):
-            covered &= a <= reach
-            reach = max(reach, b)
-        if not (covered and reach >= length):
-            ux, uy = ux | {self.ux}, uy | {self.uy}
-        return ux, uy
-
-    def to_dict(self):
-        """The edge's TOML table, segments as sub-tables by name."""
-        return {"ux": self.ux, "uy": self.uy, "traction": self.traction,
-                "water": self.water, **{seg.name: seg.to_dict() for seg in self.segments}}
-
-
-def along(side, points):
-    """Coordinate along edge ``side`` of points (P, 2) [m]: x on top and bottom, y on
-    left and right."""
-    return np.asarray(points)[..., 0 if side in ("top", "bottom") else 1]
-
-
-@dataclass(frozen=True)
-class Boundary:
-    """The four edges of the rectangle."""
-
-    left: Edge
-    right: Edge
-    bottom: Edge
-    top: Edge
-
-    def items(self):
-        """``(name, Edge)`` pairs in the order left, right, bottom, top."""
-        return tuple((name, getattr(self, name)) for name in EDGES)
-
-    def segments(self):
-        """``(edge name, Segment)`` pairs of every named segment, edges in EDGES order."""
-        return tuple((name, seg) for name, edge in self.items() for seg in edge.segments)
 
 
 @dataclass(frozen=True)
@@ -420,8 +156,10 @@ class Probe:
 class Case:
     """A validated problem: geometry, nodes, material, fluid, boundary, loading, time, probes.
 
-    Build it with :func:`soilwater.case.loader.load_case` or :func:`soilwater.case.validation.case_from_dict`;
-    it is immutable, comparable and picklable. ``material_spec`` holds the ``[material]``
+    Build it with :func:`soilwater.case.loader.load_case` or
+    :func:`soilwater.case.validation.case_from_dict`; it is immutable, comparable and
+    picklable. Change it with :meth:`replace`, which validates the changed case again
+    (:func:`dataclasses.replace` does not). ``material_spec`` holds the ``[material]``
     entries other than the fluid keys, as sorted ``(key, value)`` pairs; ``efg`` holds the
     meshless settings, weights parsed into :class:`soilwater.efg.settings.Weight` objects, and
     ``fem`` the FEM reference's (:class:`soilwater.fem.settings.FEMSettings`).
@@ -445,6 +183,47 @@ class Case:
     fem: FEMSettings = FEMSettings()
     gravity: Gravity = Gravity()
 
+    def replace(self, *overrides):
+        """A copy with ``"section.key=value"`` overrides, validated again.
+
+        The case goes back to its plain dict (:meth:`to_dict`), takes the overrides
+        (:func:`soilwater.case.schema.apply_override`) and goes through
+        :func:`soilwater.case.validation.case_from_dict`, so a bad value is refused as it
+        would be in a TOML file. :func:`dataclasses.replace` skips this validation (and
+        the checks across sections): use this method instead.
+
+        Parameters
+        ----------
+        *overrides : str
+            Entries such as ``"material.permeability=1e-6"``.
+
+        Returns
+        -------
+        Case
+
+        Raises
+        ------
+        InputError
+            One line naming the bad key and the fix.
+
+        Examples
+        --------
+        >>> from soilwater.case.loader import load_case
+        >>> load_case("terzaghi").replace("time.steps=4").times().size
+        5
+        >>> load_case("terzaghi").replace("material.permeability=-1")
+        Traceback (most recent call last):
+        ...
+        soilwater.errors.InputError: material.permeability = -1.0 must be >= 0 (m/s; 0 means undrained)
+        """
+        from soilwater.case.schema import apply_override
+        from soilwater.case.validation import case_from_dict
+
+        data = self.to_dict()
+        for text in overrides:
+            apply_override(data, text)
+        return case_from_dict(data)
+
     def exact_solution(self):
         """``points -> (u, stress)`` of the ``[exact]`` solution, or None (soilwater.references.closed_forms)."""
         if not self.exact:
@@ -467,7 +246,7 @@ class Case:
 
     def grid_lines(self):
         """Coordinates of the grid lines ``(x (nx,), y (ny,))`` [m] (regular, or laid out
-        by the pieces of :class:`Discretisation`)."""
+        by the pieces of :class:`~soilwater.case.grid.Discretisation`)."""
         d, g = self.discretisation, self.geometry
         return grid_line(g.width, d.nx, d.x), grid_line(g.height, d.ny, d.y)
 
@@ -506,7 +285,7 @@ class Case:
         """Total force on the rigid plate at time t, per unit thickness (y, tension +).
 
         ``traction[1] x load factor x initial edge length`` of the edge whose uy is rigid,
-        or ``-force x load factor`` of a load-controlled footing (:class:`Segment`; at
+        or ``-force x load factor`` of a load-controlled footing (:class:`~soilwater.case.boundary.Segment`; at
         most one plate per case); zero without a plate.
         """
         for _, edge in self.boundary.items():
@@ -518,14 +297,16 @@ class Case:
         return 0.0
 
     def edge_conditions(self, side, points):
-        """:meth:`Edge.at` of edge ``side`` at initial positions ``points`` (P, 2) [m] on it,
-        segment ends widened by :data:`SEGMENT_TOLERANCE` times the smallest spacing."""
+        """:meth:`~soilwater.case.boundary.Edge.at` of edge ``side`` at initial positions ``points`` (P, 2) [m] on it,
+        segment ends widened by
+        :data:`~soilwater.case.boundary.SEGMENT_TOLERANCE` times the smallest spacing."""
         return getattr(self.boundary, side).at(along(side, points),
                                                SEGMENT_TOLERANCE * min(self.spacing))
 
     def segment_nodes(self):
         """Indices into :meth:`nodes` of each named segment's nodes (the boundary nodes of
-        its edge within ``[from, to]``), in :meth:`Boundary.segments` order."""
+        its edge within ``[from, to]``), in
+        :meth:`~soilwater.case.boundary.Boundary.segments` order."""
         nodes = self.nodes()
         loop = self.boundary_loop()
         g, tol = self.geometry, SEGMENT_TOLERANCE * min(self.spacing)

@@ -31,7 +31,7 @@ class BoundaryPoints:
     weights : ndarray, shape (G,)
         Line weights [m per unit thickness].
     edge : ndarray, shape (G,)
-        Index into ``soilwater.case.model.EDGES`` of each point's edge.
+        Index into ``soilwater.case.boundary.EDGES`` of each point's edge.
     normal : ndarray, shape (G, 2)
         Unit outward normals.
     """
@@ -69,7 +69,7 @@ def boundary_points(nodes, loop, edges, order=BOUNDARY_ORDER):
         Boundary nodes, counter-clockwise.
     edges : ndarray of int
         Edge index of each segment (:func:`segment_edges`): its position in
-        ``soilwater.case.model.EDGES`` (left, right, bottom, top).
+        ``soilwater.case.boundary.EDGES`` (left, right, bottom, top).
     order : int
         Gauss points per segment.
     """

@@ -61,7 +61,7 @@ from soilwater.linalg.backends import Layout
 from soilwater.physics.geostatic import buoyant_weight, initial_state, total_stress
 from soilwater.results import Snapshot, permeability
 from soilwater.material.kinematics import cauchy_traction, invariants
-from soilwater.case.model import EDGES
+from soilwater.case.boundary import EDGES
 
 #: Strength-of-connection threshold of the Krylov back-end's AMG on EFG tangents
 #: (:attr:`soilwater.linalg.backends.Layout.strength`). An MLS support couples each node to many

@@ -22,7 +22,7 @@ from skfem import (CellBasis, ElementQuad1, ElementQuad2, ElementTriP1, ElementT
                    FacetBasis, MeshQuad, MeshTri)
 
 from soilwater.errors import InputError
-from soilwater.case.model import EDGES
+from soilwater.case.boundary import EDGES
 
 
 @dataclass(frozen=True)

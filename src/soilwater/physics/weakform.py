@@ -10,7 +10,7 @@ Both solvers discretise the same two equations on the start-of-step configuratio
   under gravity (:func:`soilwater.physics.geostatic.buoyant_weight`, a dead load on x_n);
 * continuity, ``-int q [alpha (J - 1) + S (p - p_n)] dOmega_n - int grad(q) . [dt (k /
   gamma_w) grad(p) + beta grad(p - p_n)] dOmega_n`` (Darcy flux ``-(k/gamma_w) grad p``;
-  k at the void ratio of ``v = v_n J`` (:meth:`soilwater.case.model.Fluid.mobility_at`), so the
+  k at the void ratio of ``v = v_n J`` (:meth:`soilwater.material.fluid.Fluid.mobility_at`), so the
   flux depends on the deformation; ``beta`` the optional pressure stabilisation of
   :mod:`soilwater.fem.solver`).
 

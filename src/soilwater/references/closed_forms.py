@@ -321,13 +321,13 @@ def undrained_poisson(material, fluid):
     Parameters
     ----------
     material : soilwater.material.protocol.Material
-    fluid : soilwater.case.model.Fluid
+    fluid : soilwater.material.fluid.Fluid
         ``biot_alpha`` and ``storage`` S [1/kPa].
 
     Examples
     --------
     >>> from soilwater.material.elastic import LinearElastic
-    >>> from soilwater.case.model import Fluid
+    >>> from soilwater.material.fluid import Fluid
     >>> undrained_poisson(LinearElastic(E=100.0, nu=0.25), Fluid(storage=0.0))
     0.5
     >>> round(undrained_poisson(LinearElastic(E=100.0, nu=0.25), Fluid(storage=1e9)), 6)

@@ -1,0 +1,175 @@
+"""Validation of ``[boundary]``: the four edges, their named segments and the supports.
+
+:func:`read_boundary` reads the section into a :class:`~soilwater.case.boundary.Boundary`
+and refuses conflicting corners, more than one rigid plate and a body free to move
+rigidly; :func:`require_coupled_footings` and :func:`require_segments_on_nodes` check the
+boundary against the rest of the case. Every refusal is one
+:class:`~soilwater.errors.InputError` line naming the key and the fix.
+"""
+
+import re
+from dataclasses import replace
+
+import numpy as np
+
+from soilwater.case.boundary import (EDGES, KINDS, SEGMENT_KINDS, SEGMENT_TOLERANCE, WATER,
+                                     Boundary, Edge, Segment)
+from soilwater.case.entries import check_keys, number, pair, section, string
+from soilwater.case.schema import KEYS, expand_displacement
+from soilwater.errors import require
+
+_RESTRAINED = ("fixed", "prescribed", "exact")
+_CORNERS = (("left", "bottom"), ("left", "top"), ("right", "bottom"), ("right", "top"))
+
+
+def read_boundary(table, loading, geometry):
+    check_keys(table, EDGES, "boundary", "edge")
+    for side in EDGES:
+        require(side in table, f"boundary: edge {side!r} is missing: add [boundary.{side}] "
+                "(every edge of the rectangle exactly once)")
+    length = {"left": geometry.height, "right": geometry.height,
+              "bottom": geometry.width, "top": geometry.width}
+    boundary = Boundary(**{side: _edge(section(table, side), side, loading, length[side])
+                           for side in EDGES})
+    corner = {("left", "bottom"): (0.0, 0.0), ("left", "top"): (geometry.height, 0.0),
+              ("right", "bottom"): (0.0, geometry.width),
+              ("right", "top"): (geometry.height, geometry.width)}
+    for a, b in _CORNERS:
+        (ka,), _, _ = getattr(boundary, a).at([corner[a, b][0]])
+        (kb,), _, _ = getattr(boundary, b).at([corner[a, b][1]])
+        for f, comp in enumerate(("ux", "uy")):
+            kinds = {str(ka[f]), str(kb[f])}
+            require(len(kinds - {"free"}) <= 1, f"boundary.{a}.{comp} and boundary.{b}."
+                    f"{comp} conflict at their corner ({' vs '.join(sorted(kinds))}; a "
+                    "segment reaching the corner counts there): make them agree or set "
+                    "one free")
+    plates = [f"boundary.{side}" for side, edge in boundary.items() if edge.uy == "rigid"]
+    plates += [f"boundary.{side}.{seg.name}" for side, seg in boundary.segments()
+               if seg.load_controlled]
+    require(len(plates) <= 1, f"{' and '.join(plates)}: at most one rigid plate or "
+            "load-controlled footing (force) per case: give the others a settlement_rate")
+    _require_supports(boundary, length)
+    return boundary
+
+
+def _require_supports(boundary, length):
+    """Refuse a body free to move rigidly: x and y translation and rotation must be stopped.
+
+    ``fixed``, ``prescribed`` and ``exact`` restrain a component, and so does a
+    velocity-controlled footing (:class:`~soilwater.case.boundary.Segment`) its uy; a ``rigid`` plate
+    (or a load-controlled footing) lets its edge settle. It would stop rotation, but never
+    decides: the uy that stops y translation is on a horizontal edge (stopping rotation
+    too) or on a vertical one, which may not meet the plate's edge with another kind.
+    """
+    kinds = {side: edge.kinds(length[side]) for side, edge in boundary.items()}
+    ux = {side for side, (kx, _) in kinds.items() if kx & set(_RESTRAINED)}
+    uy = {side for side, (_, ky) in kinds.items() if ky & {*_RESTRAINED, "footing"}}
+    kinds = '"fixed", "prescribed" or "exact"'
+    require(ux, "boundary: the body is not supported along x (no edge restrains ux): set "
+            f"an edge's ux to {kinds}, e.g. boundary.left.ux = \"fixed\"")
+    require(uy, "boundary: the body is not supported along y (no edge restrains uy; a "
+            f"rigid plate carries a load): set an edge's uy to {kinds}, e.g. "
+            "boundary.bottom.uy = \"fixed\"")
+    require(ux & {"left", "right"} or uy & {"bottom", "top"}
+            or {"bottom", "top"} <= ux or {"left", "right"} <= uy,
+            "boundary: the body is not supported against rotation: restrain ux on the left "
+            "or right edge or uy on the top or bottom edge (e.g. boundary.left.ux = "
+            "\"fixed\")")
+
+
+def _edge(table, side, loading, length):
+    where = f"boundary.{side}"
+    segments = {k: v for k, v in table.items() if isinstance(v, dict)}
+    table = {k: v for k, v in table.items() if k not in segments}
+    for key in table:
+        require(key in KEYS["edge"], f"{where}: unknown key {key!r}: allowed are "
+                f"{', '.join(KEYS['edge'])}, or a named segment [{where}.NAME]")
+    if "displacement" in table:
+        require("ux" not in table and "uy" not in table,
+                f"{where}: give either displacement or ux/uy, not both")
+        table.update(expand_displacement(table.pop("displacement"), side))
+    edge = Edge(ux=string(table, "ux", where, "free", KINDS),
+                uy=string(table, "uy", where, "free", KINDS),
+                traction=_traction(table.get("traction", (0.0, 0.0)), f"{where}.traction"),
+                water=string(table, "water", where, "impermeable", WATER))
+    require(edge.ux != "rigid" and (edge.uy != "rigid" or side in ("top", "bottom")),
+            f"{where}: 'rigid' applies to uy of the top or bottom edge only")
+    for comp, t in zip(("ux", "uy"), np.broadcast_to(np.asarray(edge.traction, object), 2)):
+        kind = getattr(edge, comp)
+        require(kind != "prescribed" or np.any(loading.L),
+                f"{where}.{comp} = 'prescribed' needs a non-zero "
+                "loading.velocity_gradient: set it, or use 'fixed'")
+        require(edge.traction == "exact" or t == 0 or kind in ("free", "rigid"),
+                f"{where}.traction acts on {comp}, "
+                f"which is {kind!r}: set that traction component to 0 or {comp} free")
+    parsed = tuple(_segment(spec, name, side, loading, length)
+                   for name, spec in segments.items())
+    spans = sorted((seg.start, seg.end, seg.name) for seg in parsed)
+    for (_, end, a), (start, _, b) in zip(spans, spans[1:]):
+        require(start > end, f"{where}.{a} and {where}.{b} overlap ({where}.{b}.from = "
+                f"{start:g} <= {where}.{a}.to = {end:g}): make the segments disjoint")
+    return replace(edge, segments=parsed)
+
+
+def _segment(table, name, side, loading, length):
+    """A named segment ``[boundary.<side>.<name>]`` (:class:`soilwater.case.boundary.Segment`)."""
+    where = f"boundary.{side}.{name}"
+    require(re.fullmatch(r"[A-Za-z0-9_-]+", name) and name not in KEYS["edge"],
+            f"{where}: use letters, digits, _ and - in segment names (they become column "
+            f"names), other than the edge's keys {', '.join(KEYS['edge'])}")
+    check_keys(table, KEYS["segment"], where)
+    start, end = number(table, "from", where), number(table, "to", where)
+    along = "x" if side in ("top", "bottom") else "y"
+    require(0 <= start < end <= length, f"{where}: from = {start:g} and to = {end:g} must "
+            f"satisfy 0 <= from < to <= {length:g} (m along {along}, the edge's length): "
+            "put the segment on the edge")
+    seg = Segment(name=name, start=start, end=end,
+                  ux=string(table, "ux", where, "free", SEGMENT_KINDS["ux"]),
+                  uy=string(table, "uy", where, "free", SEGMENT_KINDS["uy"]),
+                  water=string(table, "water", where, None, WATER) if "water" in table
+                  else None,
+                  settlement_rate=(number(table, "settlement_rate", where)
+                                   if "settlement_rate" in table else None),
+                  force=number(table, "force", where) if "force" in table else None)
+    given = [key for key in ("settlement_rate", "force") if key in table]
+    if seg.footing:
+        require(side in ("top", "bottom"), f"{where}.uy = 'footing' applies to the top "
+                "or bottom edge only: move the segment there")
+        require(len(given) == 1, f"{where}.uy = 'footing' needs exactly one of "
+                f"settlement_rate (m/s, velocity control) or force (kN/m, load control), "
+                f"not {' and '.join(given) or 'neither'}: keep one")
+    else:
+        require(not given, f"{where}.{given[0] if given else ''} applies to a footing "
+                "only: set uy = \"footing\" or remove it")
+    for comp in ("ux", "uy"):
+        require(getattr(seg, comp) != "prescribed" or np.any(loading.L),
+                f"{where}.{comp} = 'prescribed' needs a non-zero "
+                "loading.velocity_gradient: set it, or use 'fixed'")
+    return seg
+
+
+def require_coupled_footings(case):
+    footings = [f"boundary.{side}.{seg.name}" for side, seg in case.boundary.segments()
+                if seg.footing]
+    require(not footings or case.analysis == "coupled", f"{footings[0] if footings else ''}"
+            ": a footing needs analysis = \"coupled\" (the static solver has none)")
+
+
+def require_segments_on_nodes(case):
+    """Refuse a segment end between two grid nodes of its edge: the FEM reference would
+    impose the segment's kinds only up to the last node inside it, a shorter footing."""
+    x, y = case.grid_lines()
+    tol = SEGMENT_TOLERANCE * min(case.spacing)
+    for side, seg in case.boundary.segments():
+        line, axis = (x, "x") if side in ("top", "bottom") else (y, "y")
+        for key, end in (("from", seg.start), ("to", seg.end)):
+            k = np.searchsorted(line, end - tol)
+            require(abs(line[min(k, len(line) - 1)] - end) <= tol,
+                    f"boundary.{side}.{seg.name}.{key} = {end:g} lies between the grid nodes "
+                    f"at {axis} = {line[k - 1]:.6g} and {line[k]:.6g} m: put segment ends on "
+                    "grid nodes (change it, discretisation.n" + axis + " or " + axis + ")")
+
+
+def _traction(value, where):
+    """``[tx, ty]`` or ``"exact"`` (from the case's exact solution)."""
+    return "exact" if value == "exact" else pair(value, where)
