@@ -112,7 +112,7 @@ def test_run_into_the_current_folder_is_refused_and_touches_nothing(tmp_path):
 def refusing(tmp_path, monkeypatch):
     """A home folder, a working folder holding notes.txt, a data folder and a link to
     the working folder's parent; the solvers fail the test if they are ever called."""
-    from soilwater.studies.harness.runner import METHODS
+    from soilwater.methods import METHODS
 
     home, work, data = tmp_path / "home", tmp_path / "a" / "work", tmp_path / "data"
     for folder in (home, work, data):

@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 import pyvista
 
-from soilwater.studies.harness.runner import METHODS
+from soilwater.methods import METHODS
 from soilwater.errors import InputError
 from soilwater.case.loader import load_case
 from soilwater.results import MARKER, check_output_folder

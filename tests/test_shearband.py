@@ -7,7 +7,7 @@ import pytest
 from soilwater.studies.harness.deformation import nodal_strain
 from soilwater.studies.harness.metrics import LOCALISED, band
 from soilwater.studies.shearband.study import CASE, prediction
-from soilwater.studies.harness.runner import solver
+from soilwater.methods import solver
 from soilwater.case.loader import load_case
 
 #: A synthetic specimen 3 x 4 m, 25 x 33 nodes (spacing 0.125 m).

@@ -135,7 +135,7 @@ def interruptible():
 
 
 def _parser():
-    from soilwater.studies.harness.runner import METHODS
+    from soilwater.methods import METHODS
     from soilwater.material.driver import TESTS
     from soilwater.results import MARKER
 
@@ -211,6 +211,8 @@ def _parser():
 
     p = sub.add_parser("report", help="regenerate every figure and table under reports/")
     p.add_argument("--out", default="reports", help="report folder (default reports)")
+    p.add_argument("--only", metavar="STUDY[,STUDY]", help="rerun only these studies and "
+                   "rebuild REPORT.md from every study's last saved output")
     p.add_argument("--dask", metavar="ADDRESS", help="send the sweeps to a Dask "
                    "distributed scheduler (pip install 'soilwater[dask]')")
     p.set_defaults(func=_report)
@@ -245,13 +247,13 @@ def _show(args):
 
 
 def _run(args):
-    from soilwater.studies.harness.runner import METHODS
     from soilwater.case.loader import load_case
+    from soilwater.methods import solve
     from soilwater.results import check_output_folder
 
     check_output_folder(args.out)  # before any work: a bad --out fails at once
     case = load_case(args.case, args.set)
-    result = METHODS[args.method](case)
+    result = solve(case, args.method)
     result.write(args.out)
     print(f"wrote {args.out}: {json_line(result.summary)}")
 
@@ -320,7 +322,7 @@ def _report(args):
     from soilwater.studies.report import make_report
 
     runner.DASK["address"] = args.dask
-    for path in make_report(args.out):
+    for path in make_report(args.out, only=args.only):
         print(f"wrote {path}")
 
 

@@ -117,14 +117,57 @@ def permeability(case, v):
     return {"permeability": fluid.mobility_at(v)[0] * fluid.gamma_w}
 
 
+#: Units of the history columns (:attr:`Result.units`), in the built-in cases' kPa, m, s
+#: (a case in other units keeps its stress, length and time units); ``-`` is
+#: dimensionless. Columns per probe or segment are named ``KIND@NAME``, with the unit of
+#: ``KIND@``.
+HISTORY_UNITS = {
+    "time": "s", "dt": "s", "eps_a": "-", "p": "kPa", "q": "kPa", "err": "-", "gamma": "-",
+    "settlement": "m", "iterations": "-", "substeps": "-", "residual": "-",
+    "linear_iterations": "-", "uniqueness": "-", "min_angle": "degree",
+    "min_quality": "-", "min_rcond": "-", "displacement": "-", "stress": "-",
+    "energy": "-", "p_w@": "kPa", "settlement@": "m", "pressure@": "kPa",
+}
+
+#: Units of the snapshot fields (:meth:`Result.mesh` point data), as
+#: :data:`HISTORY_UNITS`: displacement ``u`` (N, 2), pore pressure ``p_w`` in excess of
+#: hydrostatic and ``p_eff``, q (compression positive), Cauchy ``stress`` (N, 4), tension
+#: positive, ``stretching`` (N, 4), specific volume ``v``, MLS ``support_radius`` and
+#: ``permeability`` k(e).
+FIELD_UNITS = {"u": "m", "p_w": "kPa", "p_eff": "kPa", "q": "kPa", "stress": "kPa",
+               "stretching": "1/s", "v": "-", "support_radius": "m",
+               "permeability": "m/s"}
+
+
+def unit(column):
+    """The unit of a history column (:data:`HISTORY_UNITS`); ``""`` if it has none listed.
+
+    Examples
+    --------
+    >>> unit("p_w@centre"), unit("settlement"), unit("eps_a")
+    ('kPa', 'm', '-')
+    """
+    kind, at, _ = column.partition("@")
+    return HISTORY_UNITS.get(kind + at, "")
+
+
 @dataclass
 class Snapshot:
-    """Fields at one output time: points (N, 2) [m] and named point arrays."""
+    """Fields at one output time: points (N, 2) [m] and named point arrays
+    (:data:`FIELD_UNITS`); ``cells`` as meshio's ``[(type, (C, V) indices)]``, empty for a
+    point cloud."""
 
     time: float
     points: np.ndarray
     point_data: dict
     cells: list = field(default_factory=list)
+
+    def mesh(self):
+        """The snapshot as a :class:`meshio.Mesh`: points (N, 3) [m] with z = 0, the cells
+        (a point cloud as ``vertex`` cells) and the point data; what the VTU files hold."""
+        cells = self.cells or [("vertex", np.arange(len(self.points))[:, None])]
+        points3 = np.column_stack([self.points, np.zeros(len(self.points))])
+        return meshio.Mesh(points3, cells, point_data=self.point_data)
 
 
 @dataclass
@@ -134,16 +177,30 @@ class Result:
     Parameters
     ----------
     case : Case
+        The case solved, resolved (defaults filled in; ``case.to_dict()`` is what
+        ``summary.json`` holds).
     method : str
-        ``efg``, ``fem-th``, ...
+        ``efg``, ``fem-th``, ... (:data:`soilwater.methods.METHODS`).
     options : dict
         Method options as run (weights, scale factors, cells, penalty factor, ...).
     history : pandas.DataFrame
-        One row per step; at least ``time, eps_a, p, q, err`` for the coupled solvers.
+        One row per time step; at least ``time, eps_a, p, q, err`` for the coupled
+        solvers. Units per column in :attr:`units`.
     snapshots : list of Snapshot
-        Fields at output steps (meshless nodes as a point cloud, or a mesh with cells).
+        Fields at output steps (meshless nodes as a point cloud, or a mesh with cells);
+        :meth:`mesh` gives one as a :class:`meshio.Mesh`.
     summary : dict
         Timings, step count, convergence, metrics; JSON-serialisable.
+
+    Examples
+    --------
+    >>> import soilwater
+    >>> result = soilwater.solve(soilwater.load_case("terzaghi", "time.steps=1"),
+    ...                          progress=False)
+    >>> result.units["time"], result.units["p_w@p0"]
+    ('s', 'kPa')
+    >>> result.mesh().point_data["p_w"].shape == (len(result.case.nodes()),)
+    True
     """
 
     case: object
@@ -152,6 +209,18 @@ class Result:
     history: pd.DataFrame
     snapshots: list
     summary: dict
+
+    @property
+    def units(self):
+        """``{column: unit}`` of the :attr:`history` columns (:data:`HISTORY_UNITS`), in
+        column order."""
+        return {column: unit(column) for column in self.history.columns}
+
+    def mesh(self, i=-1):
+        """Snapshot ``i`` (the last by default) as a :class:`meshio.Mesh`, as written to
+        ``fields_NNNN.vtu``: points (N, 3) [m], current configuration, z = 0; point data
+        in :data:`FIELD_UNITS`. Its time [s] is ``result.snapshots[i].time``."""
+        return self.snapshots[i].mesh()
 
     def write(self, folder):
         """Write ``summary.json``, ``history.csv``, ``fields.pvd``, VTU files and
@@ -200,10 +269,8 @@ class Result:
                 if not np.isfinite(values).all():
                     raise SoilwaterError(f"refusing to write field {name!r} at t = "
                                          f"{snap.time}: it holds NaN or infinity")
-            cells = snap.cells or [("vertex", np.arange(len(snap.points))[:, None])]
             name = f"fields_{k:04d}.vtu"
-            points3 = np.column_stack([snap.points, np.zeros(len(snap.points))])
-            meshio.write(folder / name, meshio.Mesh(points3, cells, point_data=snap.point_data))
+            meshio.write(folder / name, snap.mesh())
             entries.append(f'    <DataSet timestep="{float(snap.time)!r}" file="{name}"/>')
         (folder / "fields.pvd").write_text(
             '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'

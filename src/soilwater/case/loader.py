@@ -1,36 +1,42 @@
-"""Problem definitions, the public entry point: load a case by built-in name or TOML file.
+"""Load a case by built-in name or TOML file: the entry point of :mod:`soilwater.case`.
 
 :func:`load_case` reads a built-in case (see :func:`builtin_cases`) or a TOML file, applies
-``"section.key=value"`` overrides and returns the validated :class:`Case` the solvers
-read. The pieces live in four modules:
+``"section.key=value"`` overrides and returns the validated
+:class:`~soilwater.case.model.Case` the solvers read. The pieces live in these modules:
 
-* :mod:`soilwater.case.model`: the case model, :class:`Case` and its parts (:class:`Geometry`,
-  :class:`Boundary`, :class:`TimeStepping`, ...), and the constants that describe it
-  (:data:`EDGES`, :data:`KINDS`, ...);
-* :mod:`soilwater.efg.settings`: the typed method settings, :class:`EFGSettings` and the MLS
-  :class:`Weight` with its name grammar :func:`weight_form`;
+* :mod:`soilwater.case.model`: the case model, :class:`~soilwater.case.model.Case` and its
+  parts (:class:`~soilwater.case.model.Geometry`, :class:`~soilwater.case.model.TimeStepping`,
+  ...); the boundary conditions (:data:`~soilwater.case.boundary.EDGES`,
+  :data:`~soilwater.case.boundary.KINDS`, :class:`~soilwater.case.boundary.Boundary`, ...) in
+  :mod:`soilwater.case.boundary`, the node grid in :mod:`soilwater.case.grid` and the pore
+  fluid in :mod:`soilwater.material.fluid`;
+* :mod:`soilwater.efg.settings` and :mod:`soilwater.fem.settings`: the typed method
+  settings, :class:`~soilwater.efg.settings.EFGSettings` (with the MLS
+  :class:`~soilwater.efg.settings.Weight`) and :class:`~soilwater.fem.settings.FEMSettings`;
 * :mod:`soilwater.case.schema`: the TOML schema (its docstring documents every section, key,
   default and load-time bound) and the override parser;
-* :mod:`soilwater.case.validation`: :func:`case_from_dict`, which checks a plain dict against the
-  schema and builds the Case.
+* :mod:`soilwater.case.validation`: :func:`~soilwater.case.validation.case_from_dict`, which
+  checks a plain dict against the schema and builds the Case (with
+  :mod:`soilwater.case.entries` and :mod:`soilwater.case.boundary_validation`).
 
-The built-in cases are the TOML files of the package ``cases`` (the repository's
-``cases/`` folder), one case per file, named by the file's stem.
+The built-in cases are the TOML files of ``soilwater/case/builtin``, one case per file,
+named by the file's stem.
 """
 
 import tomllib
 from importlib.resources import files
 from pathlib import Path
 
-from soilwater.errors import InputError, require
+from soilwater.case.model import Case
 from soilwater.case.schema import apply_override
 from soilwater.case.validation import case_from_dict
+from soilwater.errors import InputError, require
 
 
 def builtin_cases():
     """The built-in cases, ``{name: Case}`` in alphabetical order.
 
-    One case per TOML file of the package ``cases``, named by the file's stem (each
+    One case per TOML file of ``soilwater/case/builtin``, named by the file's stem (each
     file's ``name`` key, if given, is the same).
 
     Examples
@@ -42,17 +48,21 @@ def builtin_cases():
             for name, entry in _builtin_files().items()}
 
 
-def load_case(name_or_path, overrides=()):
-    """A built-in case name or a TOML file, with ``"section.key=value"`` overrides.
+def load_case(name_or_path, *entries, overrides=()):
+    """A built-in case name, a TOML file or a case, with ``"section.key=value"`` overrides.
 
     Parameters
     ----------
-    name_or_path : str or Path
-        One of :func:`builtin_cases` or the path of a ``.toml`` file (a file without a
-        ``name`` key takes its stem as the name).
+    name_or_path : str or Path or Case
+        One of :func:`builtin_cases`, the path of a ``.toml`` file (a file without a
+        ``name`` key takes its stem as the name) or a :class:`~soilwater.case.model.Case`
+        (its :meth:`~soilwater.case.model.Case.to_dict`, validated again).
+    *entries : str or iterable of str
+        Overrides such as ``"material.permeability=1e-6"``, one per argument or in lists,
+        applied in order before validation (see
+        :func:`soilwater.case.schema.apply_override`).
     overrides : iterable of str
-        Entries such as ``"material.permeability=1e-6"``, applied before validation
-        (see :func:`soilwater.case.schema.apply_override`).
+        More overrides, applied after ``entries``.
 
     Returns
     -------
@@ -65,12 +75,21 @@ def load_case(name_or_path, overrides=()):
 
     Examples
     --------
+    >>> load_case("terzaghi", "time.steps=10", "time.end=2.0").times()[-1]
+    np.float64(2.0)
     >>> load_case("terzaghi", ["time.steps=10"]).times().size
     11
+    >>> load_case("terzaghi", overrides=("material.permeability=-1e-6",))
+    Traceback (most recent call last):
+    ...
+    soilwater.errors.InputError: material.permeability = -1e-06 must be >= 0 (m/s; 0 means undrained)
     """
-    data = _raw(name_or_path)
-    for text in overrides:
-        apply_override(data, text)
+    data = name_or_path.to_dict() if isinstance(name_or_path, Case) else _raw(name_or_path)
+    for entry in (*entries, overrides):
+        for text in ([entry] if isinstance(entry, str) else entry):
+            require(isinstance(text, str), f"override {text!r} must be a string "
+                    "section.key=value, e.g. \"material.permeability=1e-6\"")
+            apply_override(data, text)
     return case_from_dict(data)
 
 

@@ -26,10 +26,11 @@ from pathlib import Path
 import pandas as pd
 from tqdm import tqdm
 
-from soilwater.fem.spaces import PAIRS
-from soilwater.errors import SoilwaterError
-from soilwater.linalg.backends import identity, linear_solver
 from soilwater.case.loader import load_case
+from soilwater.errors import SoilwaterError
+from soilwater.fem.spaces import PAIRS
+from soilwater.linalg.backends import identity, linear_solver
+from soilwater.methods import METHODS, solver
 
 from soilwater.studies.harness.paths import CACHE, PACKAGE
 #: Scheduler address for every sweep of this process (``--dask ADDRESS``), or None.
@@ -74,42 +75,10 @@ class Outcome:
         return self.error is None
 
 
-def _efg(case, progress=True):
-    """EFG: static elasticity for ``analysis = "static"``, else the coupled solver."""
-    if case.analysis == "static":
-        from soilwater.efg.statics import solve
-
-        return solve(case)
-    from soilwater.efg.solver import solve
-
-    return solve(case, progress=progress)
-
-
-def _fem(method):
-    """The scikit-fem reference with one element pair."""
-    def solve(case, progress=True):
-        from soilwater.fem.solver import solve
-
-        return solve(case, method, progress)
-
-    return solve
-
-
-#: Solvers by method name: ``(case, progress=True) -> Result``.
-METHODS = {"efg": _efg, **{name: _fem(name) for name in PAIRS}}
-#: The source folders each method's results depend on (``efg`` and ``fem_reference``
-#: import :mod:`soil`, never each other), hashed into the cache key.
 #: The package folders a method's solver is made of, besides the shared library (every
 #: module outside ``efg/``, ``fem/`` and ``studies/``).
 SOURCES = {"efg": ("efg",), **{name: ("fem",) for name in PAIRS}}
 _APART = ("efg", "fem", "studies")
-
-
-def solver(method):
-    """The solver of a method name: ``case -> Result``."""
-    if method not in METHODS:
-        raise SoilwaterError(f"unknown method {method!r}: use one of {', '.join(METHODS)}")
-    return METHODS[method]
 
 
 def execute(job, cache_dir=CACHE):

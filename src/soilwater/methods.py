@@ -1,0 +1,96 @@
+"""The methods, by name, and :func:`solve`: run a case with one of them.
+
+``efg`` is the meshless element-free Galerkin solver (:mod:`soilwater.efg`); every other
+method is a scikit-fem element pair of :data:`soilwater.fem.spaces.PAIRS` (``fem-th``,
+``fem-p1p1``, ...). ``soilwater run --method``, the study harness and :func:`solve` all
+look methods up here, in :data:`METHODS`.
+"""
+
+from soilwater.case.loader import load_case
+from soilwater.case.model import Case
+from soilwater.errors import InputError
+from soilwater.fem.spaces import PAIRS
+
+
+def _efg(case, progress=True):
+    """EFG: static elasticity for ``analysis = "static"``, else the coupled solver."""
+    if case.analysis == "static":
+        from soilwater.efg.statics import solve
+
+        return solve(case)
+    from soilwater.efg.solver import solve
+
+    return solve(case, progress=progress)
+
+
+def _fem(method):
+    """The scikit-fem solver with the element pair ``method``."""
+    def solve(case, progress=True):
+        from soilwater.fem.solver import solve
+
+        return solve(case, method, progress)
+
+    return solve
+
+
+#: Solvers by method name, ``(case, progress=True) -> Result``: ``efg`` and the FEM pairs.
+METHODS = {"efg": _efg, **{name: _fem(name) for name in PAIRS}}
+
+
+def solver(method):
+    """The solver of a method name, ``(case, progress=True) -> Result``.
+
+    Raises
+    ------
+    InputError
+        If ``method`` is not one of :data:`METHODS` (the message lists them).
+
+    Examples
+    --------
+    >>> solver("fem-q9")
+    Traceback (most recent call last):
+    ...
+    soilwater.errors.InputError: method 'fem-q9' is unknown: use one of efg, fem-th, fem-p1p1, fem-p1p1-stab, fem-q1q1, fem-q2q1
+    """
+    if method not in METHODS:
+        raise InputError(f"method {method!r} is unknown: use one of {', '.join(METHODS)}")
+    return METHODS[method]
+
+
+def solve(case, method="efg", progress=True):
+    """Solve a case with a method and return its :class:`~soilwater.results.Result`.
+
+    Parameters
+    ----------
+    case : Case or str or Path
+        A case (:func:`soilwater.load_case`), or a built-in case name or TOML file, loaded
+        without overrides.
+    method : str
+        ``"efg"`` or an FEM pair of :data:`METHODS` (``"fem-th"``, ...).
+    progress : bool
+        A progress bar over the time steps on the terminal.
+
+    Returns
+    -------
+    Result
+        ``history`` (one row per time step, units in :attr:`Result.units`), the field
+        ``snapshots`` (:meth:`Result.mesh`), ``summary`` and the solved ``case``.
+
+    Raises
+    ------
+    InputError
+        An unknown method or a case the method cannot solve (one line naming the fix).
+    ConvergenceError
+        A step that fails after every halving, unless ``time.on_failure = "stop"``.
+
+    Examples
+    --------
+    >>> import soilwater
+    >>> case = soilwater.load_case("terzaghi", "time.steps=2", "time.end=0.1")
+    >>> result = soilwater.solve(case, "efg", progress=False)
+    >>> result.history.time.tolist()
+    [0.05, 0.1]
+    """
+    if not isinstance(case, Case):
+        case = load_case(case)
+    return solver(method)(case, progress=progress)
