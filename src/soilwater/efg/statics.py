@@ -155,9 +155,10 @@ def error_norms(shape, weights, coefficients, material, exact, points, at_nodes,
                 nodes):
     """Relative errors against the exact solution.
 
-    ``displacement``: max |u^h - u| at the nodes over max |u|; ``stress``: max over the
-    integration points of |sigma^h - sigma| over max |sigma|; ``energy``: the energy norm
-    ``sqrt(int (eps^h - eps) : C : (eps^h - eps))`` over that of the exact solution.
+    ``displacement``: max ``|u^h - u|`` at the nodes over max ``|u|``; ``stress``: max
+    over the integration points of ``|sigma^h - sigma|`` over max ``|sigma|``;
+    ``energy``: the energy norm ``sqrt(int (eps^h - eps) : C : (eps^h - eps))`` over that
+    of the exact solution.
     """
     n = len(nodes)
     u_ex, _ = exact(nodes)
