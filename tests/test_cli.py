@@ -174,7 +174,7 @@ def test_a_signal_swallowed_by_a_library_is_still_one_line(tmp_path, monkeypatch
     still the interruption's one line and status, no traceback."""
     import os
 
-    import soilwater.studies.harness.runner as runner
+    from soilwater.methods import METHODS
 
     def library(case, progress=True):
         try:
@@ -184,7 +184,7 @@ def test_a_signal_swallowed_by_a_library_is_still_one_line(tmp_path, monkeypatch
             pass                                  # what the ctypes callback did
         raise RuntimeError("no compiled object yet")
 
-    monkeypatch.setitem(runner.METHODS, "efg", library)
+    monkeypatch.setitem(METHODS, "efg", library)
     status = main(["run", "patch-test", "--method", "efg", "--out", str(tmp_path / "r")])
     assert status == 143
     assert capsys.readouterr().err.strip().splitlines() == [

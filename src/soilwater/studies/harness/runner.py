@@ -30,7 +30,7 @@ from soilwater.case.loader import load_case
 from soilwater.errors import SoilwaterError
 from soilwater.fem.spaces import PAIRS
 from soilwater.linalg.backends import identity, linear_solver
-from soilwater.methods import METHODS, solver
+from soilwater.methods import solver
 
 from soilwater.studies.harness.paths import CACHE, PACKAGE
 #: Scheduler address for every sweep of this process (``--dask ADDRESS``), or None.
