@@ -45,7 +45,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 
 import camclay_oracle as oracle  # noqa: E402
-from soilwater.material import camclay  # noqa: E402
+from soilwater.material import camclay_kernel as camclay  # noqa: E402
 from soilwater.material.camclay import CamClay  # noqa: E402
 from soilwater.linalg.threads import threads, using  # noqa: E402
 from soilwater.material.kinematics import (DEVIATORIC, deviator, double_dot, hughes_winget,  # noqa: E402
