@@ -9,6 +9,7 @@ reference from :mod:`soilwater.case.schema` by the ``case-schema`` directive of
 
 import os
 import sys
+from importlib.metadata import version as installed_version
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent / "_ext"))
@@ -16,7 +17,7 @@ sys.path.insert(0, str(Path(__file__).parent / "_ext"))
 project = "soilwater"
 author = "the soilwater authors"
 copyright = "the soilwater authors, BSD-3-Clause"
-release = version = "0.1.0"
+release = version = installed_version("soilwater")
 
 extensions = [
     "sphinx.ext.autodoc",
@@ -40,7 +41,6 @@ autosummary_imported_members = False
 autodoc_default_options = {"members": True, "undoc-members": False,
                            "show-inheritance": True, "member-order": "bysource"}
 autodoc_typehints = "none"
-autodoc_mock_imports = ["pypardiso"]
 napoleon_google_docstring = False
 napoleon_numpy_docstring = True
 napoleon_use_ivar = True
@@ -50,7 +50,7 @@ nitpicky = False
 default_role = "code"
 # Names such as `shape` or `InputError` in the parameter types match several objects:
 # they link to none rather than fail the build.
-suppress_warnings = ["autosummary.import_cycle", "ref.python"]
+suppress_warnings = ["ref.python"]
 
 # Links to the libraries the docstrings name. Fetching their inventories needs the
 # network, so it is on only with SOILWATER_DOCS_INTERSPHINX=1 (the tests build offline).

@@ -104,7 +104,7 @@ def choices():
                   if isinstance(function, ast.FunctionDef) for node in ast.walk(function)}
         for call in ast.walk(tree):
             if not (isinstance(call, ast.Call)
-                    and getattr(call.func, "id", "") in ("string", "_string")
+                    and getattr(call.func, "id", "") == "string"
                     and len(call.args) >= 3 and isinstance(call.args[1], ast.Constant)):
                 continue
             options = call.args[4] if len(call.args) >= 5 else next(
@@ -122,10 +122,12 @@ def choices():
 
 
 def _cell(text):
+    """``text`` for a table cell: its bars escaped (RST reads ``|x|`` as a substitution)."""
     return text.replace("|", r"\|") if text else ""
 
 
 def _code(text):
+    """``text`` as an inline literal (empty stays empty)."""
     return f"``{text}``" if text else ""
 
 
