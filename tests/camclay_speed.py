@@ -1,7 +1,7 @@
 """Time Cam-clay's numba return mapping against the numpy oracle, and measure their agreement.
 
-Not a test (pytest collects only ``test_*.py``): a script for issue 17's numbers. From the
-repository root::
+Not a test (pytest collects only ``test_*.py``): a script for the return mapping's speed
+numbers. From the repository root::
 
     PYTHONPATH=. python tests/camclay_speed.py                  # 6e5 points, both models
     PYTHONPATH=. python tests/camclay_speed.py --points 100000 --repeat 5
