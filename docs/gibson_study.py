@@ -12,8 +12,9 @@ import numpy as np
 from scipy.optimize import brentq
 
 from soilwater.references.closed_forms import terzaghi, xie_leo
-from soilwater.references.gibson import (Clay, Column, consolidation_time, initial_coefficients,
-                         large_strain_column, refinement, solve)
+from soilwater.references.gibson import (Column, consolidation_time, initial_coefficients,
+                                         large_strain_column, refinement, solve)
+from soilwater.references.gibson_clay import Clay
 
 GAMMA_W = 9.81
 FACTORS = np.array([0.01, 0.1, 0.3, 1.0, 3.0])      # t / (d^2 / cv0)

@@ -11,11 +11,13 @@ from scipy.optimize import brentq
 
 from soilwater.references.closed_forms import terzaghi, xie_leo
 from soilwater.errors import InputError
-from soilwater.references.gibson import (SOFT_CLAY, Clay, Column, _Discrete, consolidation_time,
-                         large_strain_column, refinement, solve)
+from soilwater.references.gibson import (Column, consolidation_time, large_strain_column,
+                                         refinement, solve)
+from soilwater.references.gibson_clay import SOFT_CLAY, Clay
+from soilwater.references.gibson_discrete import Discrete
 
 GAMMA_W = 9.81
-#: Relative accuracy the reference promises in settlement (issue 16).
+#: Relative accuracy the reference promises in settlement.
 ACCURACY = 1e-4
 
 
@@ -170,7 +172,7 @@ def test_slow_ramp_stays_near_equilibrium():
 def test_tangent_is_the_derivative_of_the_rates(law, drained_bottom):
     column = large_strain_column(clay=soft_clay(permeability_law=law), ocr=1.3,
                          drained_bottom=drained_bottom)
-    system = _Discrete(column, 12)
+    system = Discrete(column, 12)
     rng = np.random.default_rng(0)
     e = system.e0 + 0.05 * rng.standard_normal(12)    # both sides of sigma'_p
     t = 1.0
