@@ -2,6 +2,7 @@
 the Result (history with units, fields as meshio meshes, the resolved case)."""
 
 import dataclasses
+import json
 import subprocess
 import sys
 
@@ -48,7 +49,7 @@ def test_history_is_a_dataframe_with_a_unit_per_column(result):
             result.units["p_w@p0"], result.units["eps_a"]) == ("s", "kPa", "m", "kPa", "-")
 
 
-def test_fields_are_meshio_meshes_as_written(result, tmp_path):
+def test_fields_are_meshio_meshes_as_written_with_the_units(result, tmp_path):
     mesh = result.mesh()
     assert isinstance(mesh, meshio.Mesh)
     last = result.snapshots[-1]
@@ -57,7 +58,10 @@ def test_fields_are_meshio_meshes_as_written(result, tmp_path):
     assert result.snapshots[0].time == 0.0 and not result.mesh(0).point_data["p_w"].any()
     early = result.mesh(1)      # the first level after the load: the most pressure
     assert early.point_data["p_w"].max() > 2 * mesh.point_data["p_w"].max() > 0
-    written = meshio.read(result.write(tmp_path / "run") / "fields_0001.vtu")
+    out = result.write(tmp_path / "run")
+    assert json.loads((out / "summary.json").read_text())["history_units"] == result.units
+    assert list(pd.read_csv(out / "history.csv").columns) == list(result.units)
+    written = meshio.read(out / "fields_0001.vtu")
     assert np.allclose(written.points, early.points)
     assert np.allclose(written.point_data["p_w"], early.point_data["p_w"])
 

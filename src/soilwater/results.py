@@ -223,7 +223,8 @@ class Result:
         return self.snapshots[i].mesh()
 
     def write(self, folder):
-        """Write ``summary.json``, ``history.csv``, ``fields.pvd``, VTU files and
+        """Write ``summary.json`` (with the case, the options and ``history_units``, the
+        unit of each ``history.csv`` column), ``history.csv``, ``fields.pvd``, VTU files and
         :data:`MARKER` to ``folder``.
 
         ``folder`` must pass :func:`check_output_folder`. Everything goes to a hidden
@@ -258,7 +259,8 @@ class Result:
         (folder / MARKER).write_text(json.dumps(marker) + "\n")
         write_csv(self.history, folder / "history.csv")
         summary = {"case": self.case.to_dict(), "method": self.method,
-                   "options": self.options, "versions": versions(), **self.summary}
+                   "options": self.options, "versions": versions(),
+                   "history_units": self.units, **self.summary}
         (folder / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
         self._write_fields(folder)
 
