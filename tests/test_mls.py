@@ -7,7 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from soilwater.efg.mls import RCOND_MIN, ShapeFunctions, neighbours, support_radii
+from soilwater.efg.mls import RCOND_MIN, ShapeFunctions
+from soilwater.efg.mls_supports import neighbours, support_radii
 from soilwater.efg.weights import evaluate
 from soilwater.efg.settings import Weight
 from soilwater.errors import InputError
