@@ -18,7 +18,7 @@ def shape_kernel(points, nodes, support, indptr, indices, kind, c, rcond_min):
 
     Points with fewer than 3 nodes or ``rcond < rcond_min`` get zeros (the caller raises).
     The output arrays first hold the weights and their derivatives, then the shape
-    functions; the moment matrices live in one (3, 3, 3) buffer: A, A_,x, A_,y.
+    functions; the moment matrices live in one (3, 3, 3) buffer: ``A``, ``A_,x``, ``A_,y``.
     """
     nnz = indices.size
     phi, dx, dy = np.zeros(nnz), np.zeros(nnz), np.zeros(nnz)
