@@ -56,8 +56,8 @@ def _require_supports(boundary, length):
     """Refuse a body free to move rigidly: x and y translation and rotation must be stopped.
 
     ``fixed``, ``prescribed`` and ``exact`` restrain a component, and so does a
-    velocity-controlled footing (:class:`~soilwater.case.boundary.Segment`) its uy; a ``rigid`` plate
-    (or a load-controlled footing) lets its edge settle. It would stop rotation, but never
+    velocity-controlled footing (:class:`~soilwater.case.boundary.Segment`) its uy; a
+    ``rigid`` plate (or a load-controlled footing) lets its edge settle. It would stop rotation, but never
     decides: the uy that stops y translation is on a horizontal edge (stopping rotation
     too) or on a vertical one, which may not meet the plate's edge with another kind.
     """
@@ -112,7 +112,8 @@ def _edge(table, side, loading, length):
 
 
 def _segment(table, name, side, loading, length):
-    """A named segment ``[boundary.<side>.<name>]`` (:class:`soilwater.case.boundary.Segment`)."""
+    """A named segment ``[boundary.<side>.<name>]``
+    (:class:`~soilwater.case.boundary.Segment`)."""
     where = f"boundary.{side}.{name}"
     require(re.fullmatch(r"[A-Za-z0-9_-]+", name) and name not in KEYS["edge"],
             f"{where}: use letters, digits, _ and - in segment names (they become column "

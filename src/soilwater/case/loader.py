@@ -80,9 +80,10 @@ def load_case(name_or_path, *entries, overrides=()):
     >>> load_case("terzaghi", ["time.steps=10"]).times().size
     11
     >>> load_case("terzaghi", overrides=("material.permeability=-1e-6",))
+    ... # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    soilwater.errors.InputError: material.permeability = -1e-06 must be >= 0 (m/s; 0 means undrained)
+    soilwater.errors.InputError: material.permeability = -1e-06 must be >= 0 ...
     """
     data = name_or_path.to_dict() if isinstance(name_or_path, Case) else _raw(name_or_path)
     for entry in (*entries, overrides):
@@ -94,7 +95,8 @@ def load_case(name_or_path, *entries, overrides=()):
 
 
 def _builtin_files():
-    """``{stem: resource}`` of the built-in TOML files (``soilwater/case/builtin``), by name."""
+    """``{stem: resource}`` of the built-in TOML files (``soilwater/case/builtin``), by
+    name."""
     folder = files("soilwater.case") / "builtin"
     entries = {entry.name.removesuffix(".toml"): entry for entry in folder.iterdir()
                if entry.name.endswith(".toml") and entry.is_file()}

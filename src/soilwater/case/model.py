@@ -1,14 +1,15 @@
 """The case model: the immutable, validated description of a problem that the solvers read.
 
-A :class:`Case` is built by :func:`soilwater.case.loader.load_case` (a built-in name or a TOML
-file) or :func:`soilwater.case.validation.case_from_dict`; its TOML layout, defaults and load-time
-bounds are documented in :mod:`soilwater.case.schema`. Units are those of the case (kPa, m, s in the
-built-in cases).
+A :class:`Case` is built by :func:`soilwater.case.loader.load_case` (a built-in name or a
+TOML file) or :func:`soilwater.case.validation.case_from_dict`; its TOML layout, defaults
+and load-time bounds are documented in :mod:`soilwater.case.schema`. Units are those of the
+case (kPa, m, s in the built-in cases).
 
-The parts live where their concept does: the boundary conditions (:class:`Boundary`,
-:class:`~soilwater.case.boundary.Edge`, :class:`~soilwater.case.boundary.Segment`) in
-:mod:`soilwater.case.boundary`, the pore fluid (:class:`~soilwater.material.fluid.Fluid`)
-in :mod:`soilwater.material.fluid`.
+The parts live where their concept does: the boundary conditions
+(:class:`~soilwater.case.boundary.Boundary`, :class:`~soilwater.case.boundary.Edge`,
+:class:`~soilwater.case.boundary.Segment`) in :mod:`soilwater.case.boundary`, the node
+layout (:class:`~soilwater.case.grid.Discretisation`) in :mod:`soilwater.case.grid`, the
+pore fluid (:class:`~soilwater.material.fluid.Fluid`) in :mod:`soilwater.material.fluid`.
 
 Conventions: x to the right, y up, origin at the lower-left corner of the rectangle;
 stress and traction are tension positive (a traction ``[0, -1]`` on the top edge is a
@@ -30,8 +31,11 @@ from soilwater.material.fluid import Fluid
 from soilwater.material.presets import material_from_spec
 from soilwater.references.closed_forms import exact_solution
 
+#: Analyses: the coupled u-p march, or static elasticity (EFG only).
 ANALYSES = ("coupled", "static")
+#: What a step that fails after every halving does (:class:`TimeStepping`).
 ON_FAILURE = ("error", "stop")
+#: Initial stress states (:class:`Initial`).
 STRESS_STARTS = ("uniform", "geostatic")
 MAX_STEPS = 100_000
 """Largest number of time steps of a case (``time.steps``, or geometric steps to the end)."""
@@ -48,7 +52,8 @@ class Geometry:
 
 @dataclass(frozen=True)
 class Diagnostics:
-    """Optional per-step measurements: ``uniqueness`` (:mod:`soilwater.diagnostics.bifurcation`)."""
+    """Optional per-step measurements: ``uniqueness``
+    (:mod:`soilwater.diagnostics.bifurcation`)."""
 
     uniqueness: bool = False
 
@@ -211,10 +216,10 @@ class Case:
         >>> from soilwater.case.loader import load_case
         >>> load_case("terzaghi").replace("time.steps=4").times().size
         5
-        >>> load_case("terzaghi").replace("material.permeability=-1")
+        >>> load_case("terzaghi").replace("material.permeability=-1")  # doctest: +ELLIPSIS
         Traceback (most recent call last):
         ...
-        soilwater.errors.InputError: material.permeability = -1.0 must be >= 0 (m/s; 0 means undrained)
+        soilwater.errors.InputError: material.permeability = -1.0 must be >= 0 ...
         """
         from soilwater.case.schema import apply_override
         from soilwater.case.validation import case_from_dict
@@ -225,7 +230,8 @@ class Case:
         return case_from_dict(data)
 
     def exact_solution(self):
-        """``points -> (u, stress)`` of the ``[exact]`` solution, or None (soilwater.references.closed_forms)."""
+        """``points -> (u, stress)`` of the ``[exact]`` solution, or None
+        (:func:`soilwater.references.closed_forms.exact_solution`)."""
         if not self.exact:
             return None
         params = dict(self.exact)
@@ -261,7 +267,8 @@ class Case:
         grid = np.stack(np.meshgrid(x, y), axis=-1).reshape(-1, 2)
         if d.layout == "grid+centres":
             xc, yc = (x[:-1] + x[1:]) / 2, (y[:-1] + y[1:]) / 2
-            grid = np.concatenate([grid, np.stack(np.meshgrid(xc, yc), axis=-1).reshape(-1, 2)])
+            centres = np.stack(np.meshgrid(xc, yc), axis=-1).reshape(-1, 2)
+            grid = np.concatenate([grid, centres])
         if d.jitter == 0:
             return grid
         interior = np.ones(len(grid), bool)
@@ -285,8 +292,9 @@ class Case:
         """Total force on the rigid plate at time t, per unit thickness (y, tension +).
 
         ``traction[1] x load factor x initial edge length`` of the edge whose uy is rigid,
-        or ``-force x load factor`` of a load-controlled footing (:class:`~soilwater.case.boundary.Segment`; at
-        most one plate per case); zero without a plate.
+        or ``-force x load factor`` of a load-controlled footing
+        (:class:`~soilwater.case.boundary.Segment`; at most one plate per case); zero
+        without a plate.
         """
         for _, edge in self.boundary.items():
             if edge.uy == "rigid":
@@ -297,8 +305,8 @@ class Case:
         return 0.0
 
     def edge_conditions(self, side, points):
-        """:meth:`~soilwater.case.boundary.Edge.at` of edge ``side`` at initial positions ``points`` (P, 2) [m] on it,
-        segment ends widened by
+        """:meth:`~soilwater.case.boundary.Edge.at` of edge ``side`` at initial positions
+        ``points`` (P, 2) [m] on it, segment ends widened by
         :data:`~soilwater.case.boundary.SEGMENT_TOLERANCE` times the smallest spacing."""
         return getattr(self.boundary, side).at(along(side, points),
                                                SEGMENT_TOLERANCE * min(self.spacing))

@@ -1,11 +1,11 @@
 """The TOML schema of a case: sections, keys, defaults, load-time bounds and overrides.
 
-A case is a TOML file (or a built-in name, see :func:`soilwater.case.loader.builtin_cases`) read
-by :func:`soilwater.case.loader.load_case`; :func:`soilwater.case.validation.case_from_dict` checks it
-against this schema and builds the :class:`soilwater.case.model.Case` the solvers read. This module
-holds the schema's documentation and constants (the sections and their keys, the
-bounds) and the edits of a raw case dict (:func:`apply_override`,
-:func:`expand_displacement`). Units are those of the case (kPa, m, s in the built-in
+A case is a TOML file (or a built-in name, see
+:func:`soilwater.case.loader.builtin_cases`) read by :func:`soilwater.case.loader.load_case`;
+:func:`soilwater.case.validation.case_from_dict` checks it against this schema and builds
+the :class:`soilwater.case.model.Case` the solvers read. This module holds the schema's
+documentation and constants (the sections and their keys, the bounds) and the edits of a
+raw case dict (:func:`apply_override`, :func:`expand_displacement`). Units are those of the case (kPa, m, s in the built-in
 cases).
 
 Conventions: x to the right, y up, origin at the lower-left corner of the rectangle;
@@ -134,8 +134,9 @@ Schema (every case has the same one; unknown keys are an error)::
     order = 2                         # Gauss order (squares: per direction; triangles:
                                       # degree, at most 19)
     essential = "penalty"             # essential conditions: "penalty" or "nitsche"
-                                      # (soilwater.efg.nitsche: consistent, no factor to choose,
-                                      # a matrix on the stiffness's scale)
+                                      # (soilwater.efg.essential.nitsche: consistent,
+                                      # no factor to choose, a matrix on the
+                                      # stiffness's scale)
     penalty = 1e6                     # penalty factor relative to the stiffness scale
                                       # (essential = "penalty")
     correction = "vci"                # consistent test gradients (soilwater.efg.vci) or "none"

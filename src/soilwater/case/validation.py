@@ -266,7 +266,8 @@ def _require_weight(case):
 
 
 def _exact(table):
-    """``[exact]``: ``solution`` (see soilwater.references.closed_forms.SOLUTIONS) and its parameters."""
+    """``[exact]``: ``solution`` (see :data:`soilwater.references.closed_forms.SOLUTIONS`)
+    and its parameters."""
     if not table:
         return ()
     require("solution" in table, "exact: name the solution, e.g. solution = "
