@@ -6,7 +6,7 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from soilwater.studies.uniqueness.study import continuum_onset
+from soilwater.studies.harness.onset import continuum_onset
 from soilwater.efg.solver import solve as efg_solve
 from soilwater.fem.solver import solve as fem_solve
 from soilwater.diagnostics.bifurcation import DENSE_LIMIT, ellipticity, onset, restricted_eigenvalue

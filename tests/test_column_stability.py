@@ -5,7 +5,7 @@ and the pressure projection remove most of it."""
 import pytest
 
 from soilwater.studies.harness.metrics import BAD, GOOD
-from soilwater.studies.verification.study import column_stability
+from soilwater.studies.stability.study import column_stability
 
 
 @pytest.fixture(scope="module")
@@ -40,7 +40,7 @@ def test_the_projection_removes_most_of_it_on_the_finer_grid(undrained):
 def test_stabilisation_keeps_terzaghi_and_mandel_within_their_bounds(kind):
     """The same bounds as the unstabilised solver's tests (tests/test_efg_solver.py)."""
     from soilwater.studies.harness.metrics import mandel_errors, terzaghi_errors
-    from soilwater.studies.verification.study import solved
+    from soilwater.studies.harness.runs import solved
 
     stab = f"efg.stabilisation={kind}"
     terzaghi, mandel = solved([("terzaghi", ("discretisation.nx=5",
@@ -81,7 +81,7 @@ def test_a_degree_4_rule_gains_the_exponential_weights_nothing():
     E-A/E-A's errors (undrained column interior, Terzaghi, patch test, cantilever) each
     fall by less than 10 % (measured: the interior rises 1.14 -> 1.43, the others move
     under 1 %)."""
-    from soilwater.studies.verification.study import quadrature_orders
+    from soilwater.studies.stability.study import quadrature_orders
 
     table = quadrature_orders(orders=(2, 4), combinations={"E-A/E-A": ("exp:0.5", "exp:0.5")})
     two, four = (table.set_index("order").loc[o] for o in (2, 4))

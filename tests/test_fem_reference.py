@@ -10,8 +10,8 @@ from skfem import BilinearForm, CellBasis, ElementTriP1, ElementTriP2, MeshTri
 
 from soilwater.cli import main
 from soilwater.studies.harness.metrics import moose_errors, overshoot, path_error
-from soilwater.studies.peers.study import moose_terzaghi
-from soilwater.studies.verification.study import column_ratios
+from soilwater.studies.harness.moose import moose_terzaghi
+from soilwater.studies.stability.study import column_ratios
 from soilwater.fem.assembly import Shapes, block
 from soilwater.fem.solver import solve
 from soilwater.references.closed_forms import mandel, terzaghi, undrained_pressure

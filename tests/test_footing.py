@@ -250,8 +250,8 @@ def test_taylor_hood_time_step_error_at_a_tenth_of_the_width_is_small():
     (measured 0.20 %; 0.92 of Prandtl's pressure). EFG's moves by 11 % on the same
     nodes and steps (1.04, 0.98, 0.87 of Prandtl's in 5, 10, 20 steps; `make report`
     measures it on the built-in nodes): that is a finding of the report, not asserted."""
-    from soilwater.studies.footing.study import width
-    from soilwater.studies.footing.grids import refined
+    from soilwater.studies.harness.footing import width
+    from soilwater.studies.harness.grids import refined
 
     p = []
     for steps in (10, 20):
@@ -269,7 +269,7 @@ def test_undrained_elastic_footing_settles_as_flamant_per_doubling(method):
     ``(1 - nu_u) ln 2 / (pi G)`` per doubling, nu_u = 1/2 (measured for fem-th 1.0 % and
     0.3 % below it, fem-p1p1-stab 3.2 % and 1.5 %; with the drained nu = 0.333 it would be
     33 % larger)."""
-    from soilwater.studies.footing.grids import growing
+    from soilwater.studies.harness.grids import growing
     from soilwater.references.closed_forms import flamant_settlement, undrained_poisson
 
     compliance = []

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from soilwater.studies.footing import pictures
+from soilwater.studies.footing import pictures, pictures_report
 from soilwater.efg.solver import solve as efg_solve
 from soilwater.fem.solver import solve as fem_solve
 from soilwater.case.loader import load_case
@@ -30,12 +30,9 @@ def tiny():
 def test_tasks_write_pngs_gifs_and_a_section_naming_them(tiny, tmp_path):
     """The report's tasks after the runs (given here): a table, two PNGs that open, one
     GIF per method with all 11 snapshots as frames; nothing else in the folders."""
-    data = {pictures.RUNS: tiny}
     for sub in ("tables", "figures"):      # as soilwater.studies.report.make_report
         (tmp_path / sub).mkdir()
-    written = []
-    for _, task in pictures.TASKS[1:]:
-        written += task(tmp_path, data)
+    data, written = pictures_report.write(tmp_path, tiny)
     figures = tmp_path / "figures"
     names = sorted(p.name for p in figures.iterdir())
     assert names == ["footing_deformed.png", "footing_efg.gif", "footing_fem-th.gif",
@@ -50,7 +47,7 @@ def test_tasks_write_pngs_gifs_and_a_section_naming_them(tiny, tmp_path):
     table = data["footing deformation"]
     assert table.reached.tolist() == pytest.approx([0.1, 0.1])
     assert (table.dp_min < table.dp_max).all()
-    text = "\n".join(pictures.section(data))
+    text = "\n".join(pictures_report.section(data))
     for name in names:
         assert f"(figures/{name})" in text
     assert f"efg {table.eps_s_edge[0]:.3g}" in text

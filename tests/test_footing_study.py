@@ -1,5 +1,5 @@
 """The strip-footing study's tables and verdict (:mod:`soilwater.studies.footing.study`,
-:mod:`soilwater.studies.footing.domain`, :mod:`soilwater.studies.footing.grids`) on curves made by
+:mod:`soilwater.studies.footing.domain`, :mod:`soilwater.studies.harness.grids`) on curves made by
 hand, where every number is known; the runs themselves are `make report`'s."""
 
 import numpy as np
@@ -8,7 +8,7 @@ import pytest
 
 from soilwater.studies.footing import study as footing
 from soilwater.studies.footing import domain as footing_domain
-from soilwater.studies.footing.grids import growing, refined
+from soilwater.studies.harness.grids import growing, refined
 from soilwater.references.closed_forms import PRANDTL, undrained_strength
 from soilwater.case.loader import load_case
 

@@ -27,7 +27,7 @@ import pandas as pd
 from soilwater.case.loader import load_case
 from soilwater.studies.harness.metrics import axis_profile, oscillation_index, overshoot
 from soilwater.studies.harness.runner import solver
-from soilwater.studies.verification.study import stability_number
+from soilwater.studies.stability.study import stability_number
 
 RUNS = {"EFG Q/Q": ("efg", ("efg.weight_u=quartic", "efg.weight_p=quartic")),
         "EFG E-A/E-A": ("efg", ("efg.weight_u=exp:0.5", "efg.weight_p=exp:0.5")),

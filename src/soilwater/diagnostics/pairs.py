@@ -87,7 +87,7 @@ def write(out, methods, sizes=SIZES, boundaries=BOUNDARIES, overrides=()):
     list of Path
         The CSV and the figure.
     """
-    from soilwater.studies.stability import figures as stability_figures
+    from soilwater.diagnostics import figures as stability_figures
     from soilwater.results import write_csv
 
     out = Path(out)

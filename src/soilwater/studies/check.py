@@ -23,13 +23,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from soilwater.studies.verification import study as verification
-from soilwater.studies.bench.study import cpu
+from soilwater.studies.stability import study as stability
+from soilwater.studies.harness.machine import cpu
 from soilwater.studies.harness.metrics import moose_errors, terzaghi_errors
-from soilwater.studies.peers.study import moose_terzaghi
+from soilwater.studies.harness.moose import moose_terzaghi
 from soilwater.studies.harness.paths import REFERENCE
 from soilwater.studies.harness.runner import Job, run
-from soilwater.studies.uniqueness.study import DEPARTURE
+from soilwater.studies.harness.runs import DEPARTURE
 from soilwater.material.driver import run_test
 from soilwater.linalg.backends import identity
 from soilwater.material.presets import material_from_spec
@@ -71,8 +71,8 @@ def unconfined_err():
 def column_stability():
     """EFG soil column (5 x 41 nodes, first step, k = 0 and 1e-5): the Table 2 sweep of
     the paper's three weight pairs at scale factors 1.3 and 2.0."""
-    pairs = {k: v for k, v in verification.COMBINATIONS.items() if k != "E-B/E-B"}
-    return verification.table2(scales=(1.3, 2.0), combinations=pairs)
+    pairs = {k: v for k, v in stability.COMBINATIONS.items() if k != "E-B/E-B"}
+    return stability.table2(scales=(1.3, 2.0), combinations=pairs)
 
 
 def consolidation_errors():

@@ -1,11 +1,9 @@
 """Penalty against Nitsche's method (``efg.essential``): accuracy and what a Krylov solver
-sees (issue 17, item 1).
+sees.
 
 * :func:`accuracy`: the verification cases with either method, each with its error
   against the closed form (patch test, cantilever, Terzaghi, Mandel, unconfined
   compression, simple shear; the strip footing against fem-th);
-* :func:`footing_reach`: the strip-footing study's runs with either method, how far
-  they get and how close to fem-th;
 * :func:`confined`: how near singular the undrained simple shear's tangent is with
   either method, with and without the pressure stabilisation;
 * :func:`eigenvalue_strips`: Nitsche's eigenvalue bound on strips of 0 to 3 neighbour
@@ -16,10 +14,10 @@ sees (issue 17, item 1).
   error of its solution measured against the direct solve.
 
 ``python -m soilwater.studies.essential.study`` prints the tables (measured: 5 min for the
-conditioning, 10 min for the accuracy, 5 min for the footing runs on 2 cores).
-``make report`` writes :func:`accuracy` and :func:`confined` with its :func:`section`
-(its coupled runs go through the cached runner); the footing's reach is the footing
-study's (:data:`soilwater.studies.footing.study.METHODS`' ``efg+nitsche``).
+conditioning, 10 min for the accuracy on 2 cores). ``make report`` writes
+:func:`accuracy` and :func:`confined` with its :func:`section` (its coupled runs go
+through the cached runner); how far the footing gets with either method is
+:mod:`soilwater.studies.footing.reach`.
 """
 
 import itertools
@@ -30,11 +28,9 @@ import pandas as pd
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from soilwater.studies.footing import study as footing
 from soilwater.studies.harness import tables
-from soilwater.studies.footing.grids import refined
 from soilwater.studies.harness.metrics import mandel_errors, path_error, terzaghi_errors
-from soilwater.studies.verification.study import solved
+from soilwater.studies.harness.runs import solved
 from soilwater.efg import nitsche
 from soilwater.efg import quadrature
 from soilwater.efg import solver
@@ -233,27 +229,6 @@ def conditioning(cases=CONDITIONING_CASES, methods=METHODS, rtols=(1e-3, 1e-6, 1
     return pd.DataFrame(summary), pd.DataFrame(krylov)
 
 
-def footing_reach(methods=METHODS, densities=(4, 8)):
-    """The strip-footing study's runs (:mod:`soilwater.studies.footing.study`, to 0.5 B in 100 steps)
-    with either method and with fem-th, on ``densities`` spacings per B at the footing:
-    how far each gets and how far its curve lies from fem-th's on the finest.
-
-    Returns
-    -------
-    pandas.DataFrame
-        :func:`soilwater.studies.footing.study.summary`'s ``label, nodes, reached``, the pressure at
-        :data:`soilwater.studies.footing.study.AT` B, ``error`` (against fem-th on ``densities[-1]``)
-        and ``run_time``.
-    """
-    steps = load_case(footing.CASE).time.steps
-    variants = [(f"efg, {m}", "efg", (f"efg.essential={m}",)) for m in methods]
-    study = [(label, method, core, steps, (*refined(core), *extra))
-             for core in densities
-             for label, method, extra in (*variants, ("fem-th", "fem-th", ()))]
-    table = footing.summary(footing.curves(study), reference=("fem-th", densities[-1]))
-    return table[["label", "nodes", "reached", f"at_{footing.AT:g}B", "error", "run_time"]]
-
-
 def confined(methods=METHODS, stabilisations=("none", "perturbation"), small=1e-6):
     """The singular values of the first Newton tangent of the undrained simple shear
     (every edge prescribed, k = 0: the pore pressure is defined up to the constant
@@ -308,7 +283,7 @@ def section(accuracy, confined):
                                           else f"{v:.3g}") for m in METHODS})
     c = confined.set_index(["method", "stabilisation"])
     return [
-        "## Essential conditions: penalty or Nitsche (issue 17)",
+        "## Essential conditions: penalty or Nitsche",
         "",
         "Every verification case run with `efg.essential = \"penalty\"` (the paper's and "
         "the default) and `\"nitsche\"` (Nitsche's symmetric method, its stabilisation "
@@ -420,8 +395,6 @@ def main():
     print(summary.to_string(index=False, float_format="{:.3g}".format))
     print("\n## GMRES + incomplete LU: residual reached against the error\n")
     print(krylov.to_string(index=False, float_format="{:.3g}".format))
-    print("\n## Strip footing to 0.5 B: reach and error against fem-th\n")
-    print(footing_reach().to_string(index=False, float_format="{:.3g}".format))
     print("\n## Undrained simple shear, first tangent: scaled singular values\n")
     print(confined().to_string(index=False, float_format="{:.3g}".format))
     print("\n## Nitsche's eigenvalue bound on boundary strips (cantilever, lambda h / M)\n")

@@ -1,6 +1,6 @@
 """How large the strip footing's domain must be: Taylor-Hood on square domains of
 :data:`DOMAINS` B a side, equal spacings of B/8 at the footing growing by about 15 % per
-cell beyond (:func:`soilwater.studies.footing.grids.growing`).
+cell beyond (:func:`soilwater.studies.harness.grids.growing`).
 
 In plane strain there is no domain large enough for the settlement at a given load to
 stop changing: a line load on an elastic body settles as the logarithm of the depth of
@@ -15,21 +15,19 @@ against that prediction, and what is left once every curve is shifted to the lar
 domain: the boundaries' effect on the mechanism under the footing.
 """
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-from soilwater.studies.harness import tables  # noqa: E402
-from soilwater.studies.footing.study import CASE, FROM, width  # noqa: E402
-from soilwater.studies.footing.grids import growing, refined  # noqa: E402
-from soilwater.studies.verification.study import solved  # noqa: E402
-from soilwater.references.closed_forms import (PRANDTL, flamant_settlement, undrained_poisson,  # noqa: E402
+from soilwater.studies.harness import tables
+from soilwater.studies.footing.study import FROM
+from soilwater.studies.harness.footing import CASE, width
+from soilwater.studies.harness.grids import growing, refined
+from soilwater.studies.harness.runs import solved
+from soilwater.references.closed_forms import (PRANDTL, flamant_settlement, undrained_poisson,
                              undrained_strength)
-from soilwater.material.driver import run_test  # noqa: E402
-from soilwater.case.loader import load_case  # noqa: E402
+from soilwater.material.driver import run_test
+from soilwater.case.loader import load_case
 
 #: Sides of the square domains [B].
 DOMAINS = (5, 10, 20, 40)

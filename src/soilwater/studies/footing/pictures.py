@@ -1,4 +1,4 @@
-"""Pictures of the strip-footing runs (issue 15, item 7): the deformed configurations
+"""Pictures of the strip-footing runs: the deformed configurations
 coloured by shear strain, the excess pore pressure, and an animation of each method.
 
 Every picture is drawn from :class:`soilwater.results.Result` objects of the built-in
@@ -16,25 +16,22 @@ import textwrap
 from contextlib import contextmanager
 from pathlib import Path
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+from matplotlib.animation import PillowWriter
+from matplotlib.collections import PolyCollection
+from matplotlib.colors import Normalize, PowerNorm
+from matplotlib.patches import Rectangle
+from matplotlib.ticker import MaxNLocator
+from matplotlib.tri import Triangulation
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-from matplotlib.animation import PillowWriter  # noqa: E402
-from matplotlib.collections import PolyCollection  # noqa: E402
-from matplotlib.colors import Normalize, PowerNorm  # noqa: E402
-from matplotlib.patches import Rectangle  # noqa: E402
-from matplotlib.ticker import MaxNLocator  # noqa: E402
-from matplotlib.tri import Triangulation  # noqa: E402
-
-from soilwater.studies.harness import deformation  # noqa: E402
-from soilwater.studies.harness import tables  # noqa: E402
-from soilwater.studies.footing.study import CASE, DENSITIES, PLAIN, width  # noqa: E402
-from soilwater.studies.footing.grids import refined  # noqa: E402
-from soilwater.studies.verification.study import solved  # noqa: E402
-from soilwater.geometry.quality import DISTORTED, cell_quality  # noqa: E402
+from soilwater.studies.harness import deformation
+from soilwater.studies.footing.study import DENSITIES
+from soilwater.studies.harness.footing import CASE, PLAIN, width
+from soilwater.studies.harness.grids import refined
+from soilwater.studies.harness.runs import solved
+from soilwater.geometry.quality import DISTORTED, cell_quality
 
 #: Spacings per B at the footing of the runs the report draws: the built-in case's.
 CORE = DENSITIES[len(DENSITIES) // 2]
@@ -49,8 +46,6 @@ LEVEL_PERCENTILES = (1.0, 99.0)
 #: Most frames of an animation, and its frame rate [1/s].
 FRAMES = 50
 FPS = 10
-#: Key of the runs in the report's ``data``.
-RUNS = "footing runs"
 CMAP = "viridis"
 STRAIN_LABEL = "shear strain eps_s = sqrt(2/3 e':e'), Hencky [-]"
 PRESSURE_LABEL = "excess pore pressure p_w - p_w0 [kPa], compression positive"
@@ -409,71 +404,3 @@ def measures(results):
                        inverted=int((last <= 0).sum()))
         rows.append(row)
     return pd.DataFrame(rows)
-
-
-def section(data):
-    """The report's lines on the pictures, with the numbers of :func:`measures`
-    (``data["footing deformation"]``) and the runs (``data[RUNS]``)."""
-    table = data["footing deformation"]
-    fem = table[table.distorted != ""]
-    results = data[RUNS]
-    grid = results[0].case.discretisation
-    gifs = " ".join(f"![{r.method}](figures/footing_{r.method}.gif)" for r in results)
-    return [
-        "### Strip footing: deformed configurations, pore pressure, animations",
-        "",
-        "![deformed configurations](figures/footing_deformed.png)",
-        "",
-        f"The runs on {grid.nx} x {grid.ny} nodes at their last level, {ZOOM:g} B x {ZOOM:g} B "
-        "next to the footing, coloured by the shear strain eps_s = sqrt(2/3 e':e') of "
-        "the Hencky strain (e' its deviator, plane strain) of each triangle of the "
-        "initial nodes (FEM: its elements' corners; EFG: the Delaunay triangles of its "
-        "initial nodes, the dots showing area-weighted nodal averages). The largest "
-        f"eps_s within {EDGE_RADIUS:g} B of the footing's edge: "
-        + ", ".join(f"{r.method} {r.eps_s_edge:.3g}" for r in table.itertuples())
-        + ". Elements outlined in red are distorted, their smallest angle below "
-        f"{DISTORTED:.2g} of its undeformed value: "
-        + ("; ".join(f"{r.method} {r.distorted} at the last level ({r.inverted} "
-                     "inverted)" for r in fem.itertuples()) if len(fem) else "no FEM run")
-        + ".",
-        "",
-        "![excess pore pressure](figures/footing_pore_pressure.png)",
-        "",
-        "Excess pore pressure p_w - p_w0 (kPa, compression positive) on the deformed "
-        "configuration at the last level; in view it ranges over "
-        + "; ".join(f"{r.method} {r.dp_min:.3g} to {r.dp_max:.3g} kPa"
-                    for r in table.itertuples())
-        + " (the contour levels span percentiles {:g} to {:g} of all of them; beyond, "
-        "the end colours).".format(*LEVEL_PERCENTILES),
-        "",
-        gifs,
-        "",
-        "Each method's deformation (" + ", ".join(
-            f"{r.method} {len(frames(len(r.snapshots)))} of its {len(r.snapshots)}"
-            for r in results) + " snapshots; one colour scale), the settlement and "
-        "contact pressure in the title.",
-        "",
-    ]
-
-
-def _runs_task(root, data):
-    data[RUNS] = runs()
-    return []
-
-
-def _measures_task(root, data):
-    data["footing deformation"] = measures(data[RUNS])
-    return list(tables.write(data["footing deformation"],
-                             root / "tables" / "footing_deformation"))
-
-
-#: The report's tasks, ``(name, task(root, data) -> paths written)``, in order.
-TASKS = [
-    ("footing runs", _runs_task),
-    ("footing deformation", _measures_task),
-    ("footing deformed figure", lambda root, data: [
-        deformed_figure(data[RUNS], root / "figures" / "footing_deformed.png")]),
-    ("footing pore pressure figure", lambda root, data: [
-        pore_pressure_figure(data[RUNS], root / "figures" / "footing_pore_pressure.png")]),
-    ("footing animations", lambda root, data: animations(data[RUNS], root / "figures")),
-]

@@ -5,7 +5,7 @@ and at what cost.
 The built-in ``strip-footing`` case (footing width B = 1 m, symmetry half, weightless
 normally consolidated Cam-clay, k = 0, 10 B x 10 B) is run by each method of
 :data:`METHODS` on the three node densities of :data:`DENSITIES` (the built-in layout
-refined, :func:`soilwater.studies.footing.grids.refined`) to a settlement of 0.5 B, and EFG
+refined, :func:`soilwater.studies.harness.grids.refined`) to a settlement of 0.5 B, and EFG
 also with more time steps on the coarsest nodes (:data:`EFG_STEPS`). ``s_u`` is the clay's plane-strain
 undrained strength (:func:`soilwater.references.closed_forms.undrained_strength`). The reference curve is
 that of :data:`REFERENCE`, the finest Taylor-Hood run; a run's error is its largest
@@ -15,34 +15,20 @@ it does not integrate on, since it re-triangulates every step) is distorted once
 smallest angle falls below :data:`soilwater.geometry.quality.DISTORTED` of its undeformed value.
 """
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
+from soilwater.studies.harness import deformation
+from soilwater.studies.harness import tables
+from soilwater.studies.harness.footing import CASE, METHODS, width
+from soilwater.studies.harness.grids import refined
+from soilwater.studies.harness.runs import solved
+from soilwater.references.closed_forms import PRANDTL, undrained_strength
+from soilwater.case.loader import load_case
+from soilwater.geometry.quality import DISTORTED
 
-from soilwater.studies.harness import deformation  # noqa: E402
-from soilwater.studies.harness import tables  # noqa: E402
-from soilwater.studies.footing.grids import refined  # noqa: E402
-from soilwater.studies.verification.study import solved  # noqa: E402
-from soilwater.references.closed_forms import PRANDTL, undrained_strength  # noqa: E402
-from soilwater.case.loader import load_case  # noqa: E402
-from soilwater.geometry.quality import DISTORTED  # noqa: E402
-
-CASE = "strip-footing"
-#: The methods of the study (label: method and overrides): the three of the paper's
-#: comparison, EFG with Nitsche's essential conditions in place of the paper's penalty
-#: (``efg.essential``: the penalty's tie stiffens the footing) and Taylor-Hood re-meshed
-#: when its mesh degrades (``fem.remesh``; P1/P1's elements stay above the re-meshing
-#: threshold to 1 B, so it would not re-mesh).
-METHODS = {"efg": ("efg", ()), "efg+nitsche": ("efg", ("efg.essential=nitsche",)),
-           "fem-th": ("fem-th", ()), "fem-p1p1-stab": ("fem-p1p1-stab", ()),
-           "fem-th+remesh": ("fem-th", ("fem.remesh=delaunay",))}
-#: The methods of :data:`METHODS` without overrides, whose labels are their method names
-#: (the paper's comparison): the partially drained footing and the pictures run these.
-PLAIN = {label: spec for label, spec in METHODS.items() if not spec[1]}
-#: Equal spacings per B at the footing (:func:`soilwater.studies.footing.grids.refined`);
+#: Equal spacings per B at the footing (:func:`soilwater.studies.harness.grids.refined`);
 #: the middle one is the built-in case's.
 DENSITIES = (4, 8, 12)
 #: Time steps to 0.5 B of EFG's extra runs on the coarsest nodes (the case has 100).
@@ -71,12 +57,6 @@ def family(labels):
 def meshless(labels):
     """Whether each run label is an EFG run (any :data:`METHODS` entry solved by EFG)."""
     return family(labels).map(lambda f: METHODS[f][0] == "efg")
-
-
-def width(case):
-    """Footing width B [m]: twice the segment (the case is the symmetry half)."""
-    (_, footing), = case.boundary.segments()
-    return 2 * (footing.end - footing.start)
 
 
 def runs(methods=METHODS, densities=DENSITIES, efg_steps=EFG_STEPS, deep=DEEP):
@@ -290,7 +270,7 @@ def section(summary):
     stops = summary[summary.reached < summary.to - 1e-9]
     distorted = summary[summary.distorted_at.notna()]
     return [
-        "## Strip footing: how far each method gets (issue 15)",
+        "## Strip footing: how far each method gets",
         "",
         "![footing](figures/footing.png)",
         "",

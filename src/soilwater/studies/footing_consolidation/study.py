@@ -9,18 +9,15 @@ as far as the undrained footing of ``strip-footing`` at the same pressure: a che
 load control against velocity control, by the same method on the same nodes.
 """
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-from soilwater.studies.harness import tables  # noqa: E402
-from soilwater.studies.footing.study import PLAIN, width  # noqa: E402
-from soilwater.studies.verification.study import solved  # noqa: E402
-from soilwater.references.closed_forms import PRANDTL, undrained_strength  # noqa: E402
-from soilwater.case.loader import load_case  # noqa: E402
+from soilwater.studies.harness import tables
+from soilwater.studies.harness.footing import PLAIN, width
+from soilwater.studies.harness.runs import solved
+from soilwater.references.closed_forms import PRANDTL, undrained_strength
+from soilwater.case.loader import load_case
 
 CASE = "strip-footing-consolidation"
 #: The end of loading [s] (the load function's first plateau).

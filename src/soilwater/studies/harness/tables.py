@@ -3,6 +3,7 @@
 import pandas as pd
 
 from soilwater.material.presets import material_from_spec
+from soilwater.studies.harness.runs import ERR_NOISE
 
 
 def table1(preset="table1"):
@@ -46,3 +47,21 @@ def write(frame, stem):
     frame.to_csv(csv, index=False)
     md.write_text(to_markdown(frame))
     return csv, md
+
+
+#: ERR columns of the path summary and the bifurcation table whose values below the
+#: Newton noise are written as a bound.
+NOISY = ("err_before", "err_max", "err_final", "err_after_min", "err_after_max")
+
+
+def below_noise(table, columns=NOISY, noise=ERR_NOISE):
+    """The table with ERR values below ``noise`` written as a bound ``"< noise"``: their
+    digits are the Newton tolerance's noise and differ between linear solvers."""
+    bound = f"< {noise:g}"
+    return table.assign(**{c: table[c].map(lambda v: bound if v < noise else v)
+                           .astype(object) for c in columns if c in table})
+
+
+def marked(table, columns):
+    """The table with a † after the names of its branch-dependent ``columns``."""
+    return table.rename(columns={c: f"{c} †" for c in columns})

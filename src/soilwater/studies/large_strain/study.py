@@ -11,19 +11,16 @@ along its K0 path), the same permeability law, unit weights, height, surcharge, 
 drainage. Time is measured in ``T = d^2 / c_v0`` (:func:`soilwater.references.gibson.consolidation_time`).
 """
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-from soilwater.studies.harness import tables  # noqa: E402
-from soilwater.studies.verification.study import solved  # noqa: E402
-from soilwater.references import gibson  # noqa: E402
-from soilwater.references.closed_forms import terzaghi  # noqa: E402
-from soilwater.physics.geostatic import G_N, initial_state, normal_void_ratio  # noqa: E402
-from soilwater.case.loader import load_case  # noqa: E402
+from soilwater.studies.harness import tables
+from soilwater.studies.harness.runs import solved
+from soilwater.references import gibson, gibson_clay
+from soilwater.references.closed_forms import terzaghi
+from soilwater.physics.geostatic import G_N, initial_state, normal_void_ratio
+from soilwater.case.loader import load_case
 
 METHODS = ("efg", "fem-th", "fem-p1p1-stab")
 CASES = ("large-strain-column", "self-weight-consolidation")
@@ -41,7 +38,7 @@ def column(case):
     """The :class:`soilwater.references.gibson.Column` of a case (module docstring)."""
     material, fluid = case.material(), case.fluid
     assert case.gravity.g in (0.0, G_N), "Gibson's column weighs at standard gravity"
-    clay = gibson.Clay(lam=material.lam, kappa=material.kappa, sigma_v_ref=SIGMA_REF,
+    clay = gibson_clay.Clay(lam=material.lam, kappa=material.kappa, sigma_v_ref=SIGMA_REF,
                        e_ref=float(normal_void_ratio(case, material, SIGMA_REF)),
                        permeability=fluid.permeability,
                        permeability_law=fluid.permeability_law,
@@ -329,7 +326,7 @@ def section(summary, small, profile_errors):
         "",
         tables.to_markdown(summary, floatfmt="{:.4g}"),
         "",
-        f"Against the issue's targets on `{CASES[0]}` (settlement within 2 % from 0.1 T "
+        f"Against the targets on `{CASES[0]}` (settlement within 2 % from 0.1 T "
         "on, final within 1 %, pore pressure profiles within 2 % of the load): "
         + "; ".join(f"{m} {loaded.loc[m, w] * 100:.2f} % / {abs(loaded.loc[m, 'final_error']) * 100:.2f} % / "
                     f"{errs.loc[(CASES[0], m), 'p_w_error'] * 100:.2f} %"

@@ -77,11 +77,6 @@ def mfront_triaxial(folder=PEER_DATA):
     })
 
 
-def moose_terzaghi(folder=PEER_DATA):
-    """MOOSE's consistent Q1/Q1 Terzaghi file (peer-data case A): time, p0..p9, p99, zdisp."""
-    return pd.read_csv(Path(folder) / "moose_poromech_terzaghi_Q1Q1_consistent.csv")
-
-
 def relative_difference(frame, column, floor=0.0):
     """``|ours - ref| / max(|ref|, floor)`` for one column of a peer table."""
     ref = frame[f"{column}_ref"].abs().clip(lower=max(floor, 1e-300))

@@ -13,23 +13,20 @@ linear solver and with its interior nodes jittered by 1e-9 of the spacing
 (:data:`VARIANTS`): the spread of the angle over these is a finding, not noise to hide.
 """
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-from soilwater.studies.harness import runner  # noqa: E402
-from soilwater.studies.harness import tables  # noqa: E402
-from soilwater.studies.harness.deformation import nodal_strain  # noqa: E402
-from soilwater.studies.harness.metrics import band  # noqa: E402
-from soilwater.studies.uniqueness.study import continuum_onset, solvers  # noqa: E402
-from soilwater.diagnostics.bifurcation import onset  # noqa: E402
-from soilwater.material.driver import continuum_path  # noqa: E402
-from soilwater.errors import SoilwaterError  # noqa: E402
-from soilwater.linalg.backends import backend  # noqa: E402
-from soilwater.case.loader import load_case  # noqa: E402
+from soilwater.studies.harness import runner
+from soilwater.studies.harness import tables
+from soilwater.studies.harness.deformation import nodal_strain
+from soilwater.studies.harness.metrics import band
+from soilwater.studies.harness.onset import continuum_onset, solvers
+from soilwater.diagnostics.bifurcation import onset
+from soilwater.material.driver import continuum_path
+from soilwater.errors import SoilwaterError
+from soilwater.linalg.backends import backend
+from soilwater.case.loader import load_case
 
 CASE = "rough-compression"
 METHODS = ("efg", "fem-th", "fem-p1p1-stab")
@@ -50,7 +47,7 @@ VARIANTS = {"pardiso": ("pardiso", ()), "superlu": ("superlu", ()),
 def prediction(case=CASE, strain=0.2, points=400):
     """The shear band predicted by the loss of ellipticity of the homogeneous state.
 
-    :func:`soilwater.studies.uniqueness.study.continuum_onset` follows the driver's undrained
+    :func:`soilwater.studies.harness.onset.continuum_onset` follows the driver's undrained
     plane-strain path of the case's material; at the first zero of the Rudnicki-Rice
     indicator (:func:`soilwater.diagnostics.bifurcation.onset`) its minimising direction is the band
     normal ``n``. The band contains the direction ``t`` normal to ``n``, so the band's
@@ -321,47 +318,13 @@ def _configuration(ax, result, vmax):
     return image
 
 
-def _study(root, data):
-    data["shearband runs"] = runs()
-    data["shearband prediction"] = prediction()
-    return []
-
-
-def _curves(root, data):
-    data["shearband curves"] = curves(data["shearband runs"])
-    return list(tables.write(data["shearband curves"], root / "tables" / "shearband_curves"))
-
-
-def _summary(root, data):
-    data["shearband"] = summary(data["shearband curves"], data["shearband prediction"])
-    return list(tables.write(data["shearband"], root / "tables" / "shearband"))
-
-
-def _robustness(root, data):
-    data["shearband robustness"] = robustness(data["shearband runs"])
-    return list(tables.write(data["shearband robustness"],
-                             root / "tables" / "shearband_robustness"))
-
-
-def _figure(root, data):
-    return [figure(data["shearband runs"], data["shearband curves"],
-                   data["shearband prediction"], root / "figures" / "shearband.png")]
-
-
-#: The report's tasks, ``(name, task(root, data) -> paths written)`` as in
-#: :data:`soilwater.studies.report.TASKS`, in order.
-TASKS = [("shearband runs", _study), ("shearband curves", _curves),
-         ("shearband", _summary), ("shearband robustness", _robustness),
-         ("shearband figure", _figure)]
-
-
 def section(data):
     """The report's shear-band section: figure, tables and what they show."""
     predicted, table = data["shearband prediction"], data["shearband"]
     spread = data["shearband robustness"]
     members = [c[len("angle["):-1] for c in spread.filter(like="angle[").columns]
     return [
-        "## Rough-platen compression: the shear band (issue 15)",
+        "## Rough-platen compression: the shear band",
         "",
         "![shearband](figures/shearband.png)",
         "",

@@ -1,41 +1,8 @@
-"""Figures of the report's pore-pressure stability section: the inf-sup test and the
-Table 2 sweep; each saves a PNG and returns its path."""
+"""Figures of the report's pore-pressure stability section: the Table 2 sweep and the
+column profiles; each saves a PNG and returns its path."""
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-
-def infsup(table, slopes, path):
-    """Inf-sup value beta against the nodal spacing h (log-log), one line per pair and
-    setting, a panel per boundary variant; the legend gives each line's last local slope
-    (:func:`soilwater.diagnostics.pairs.slopes`; sizes where beta is zero are left out)."""
-    boundaries = list(dict.fromkeys(table.boundary))
-    fig, axes = plt.subplots(1, len(boundaries), figsize=(6 * len(boundaries), 4.8),
-                             sharey=True, constrained_layout=True, squeeze=False)
-    keys = ["method", "weights", "scale_u", "scale_p"]
-    fits = slopes.set_index(keys + ["boundary"])
-    for ax, boundary in zip(axes[0], boundaries):
-        part = table[table.boundary == boundary]
-        for k, (key, group) in enumerate(part.groupby(keys, sort=False, dropna=False)):
-            fit = fits.loc[(*key, boundary)]
-            label = key[0] if key[0] != "efg" else f"efg {key[1]} x{key[2]:g}/{key[3]:g}"
-            group = group[group.beta > 0]          # no displacement sees a pressure
-            ax.loglog(group.h, group.beta, "o-" if fit.stable else "s--", ms=4,
-                      color=f"C{k % 10}", label=f"{label}: slope {fit.slope:.2f}")
-        ax.set(title=f"v {'free' if boundary == 'free' else '= 0'} on the boundary",
-               xlabel="nodal spacing h (unit square)")
-        ax.invert_xaxis()
-        ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=7)
-    axes[0, 0].set_ylabel("inf-sup value beta")
-    fig.suptitle("Numerical inf-sup test (Chapelle and Bathe): solid lines level off "
-                 "(stable), dashed lines decay", fontsize=10)
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
+import matplotlib.pyplot as plt
+import numpy as np
 
 
 def table2(table, path):
@@ -65,6 +32,32 @@ def table2(table, path):
     fig.suptitle("Table 2 redesigned: soil column 5 x 41, first step; the paper's symbols "
                  "(× bad, △ better, ○ good, low to high density) beside the rows",
                  fontsize=10)
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def column_profiles(table, path):
+    """Pore pressure along the column after the first step, one panel per run."""
+    runs = list(dict.fromkeys(table.run))
+    cols = 4
+    rows = -(-len(runs) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 4.2 * rows), sharey=True,
+                             constrained_layout=True, squeeze=False)
+    for ax, run in zip(axes.flat, runs):
+        part = table[table.run == run]
+        ax.plot(part.reference, part.y, "k-", lw=3, alpha=0.3, label="Terzaghi, initial "
+                "stiffness")
+        ax.plot(part.p_w, part.y, "o-", ms=3, color="C3", label="p$_w$ on the axis")
+        ax.set(title=run, xlabel="p$_w$ / load", xlim=(-0.6, 2.2))
+        ax.axvline(1.0, color="k", lw=0.5, ls=":")
+        ax.grid(alpha=0.3)
+    for ax in axes.flat[len(runs):]:
+        ax.set_visible(False)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("height y (m)")
+    axes.flat[0].legend(fontsize=7, loc="lower left")
+    fig.suptitle("Soil column (paper Fig. 8), first step of 40 s: h$^2$/(c$_v$ dt) = 30")
     fig.savefig(path, dpi=150)
     plt.close(fig)
     return path

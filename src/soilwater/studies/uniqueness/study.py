@@ -3,9 +3,9 @@
 Past the loss of uniqueness of the homogeneous undrained solution (:mod:`soilwater.diagnostics.bifurcation`)
 round-off chooses the branch, so a single run's ERR says nothing about a method. Here:
 
-* :func:`continuum_onset`: the Rudnicki-Rice criterion along the stress-point driver's
+* :func:`soilwater.studies.harness.onset.continuum_onset`: the Rudnicki-Rice criterion along the stress-point driver's
   path, the material's own onset;
-* :func:`ensemble`: every run of :data:`soilwater.studies.verification.study.PATH_RUNS` with its node
+* :func:`ensemble`: every run of :data:`soilwater.studies.harness.runs.PATH_RUNS` with its node
   set jittered (:data:`JITTERS`, a fraction of the spacing) and with each linear solver,
   the unperturbed members recording the discrete indicator per step;
 * :func:`summary`: per run, the discrete onset, ERR before it (comparable between methods)
@@ -16,55 +16,14 @@ import numpy as np
 import pandas as pd
 
 from soilwater.studies.harness import runner
-from soilwater.studies.verification.study import PATH_RUNS, UNIQUENESS
-from soilwater.diagnostics.bifurcation import ellipticity, onset
-from soilwater.material.driver import continuum_path
+from soilwater.studies.harness.onset import solvers
+from soilwater.studies.harness.runs import DEPARTURE, PATH_RUNS, UNIQUENESS
+from soilwater.diagnostics.bifurcation import onset
 from soilwater.errors import SoilwaterError
-from soilwater.material.kinematics import in_plane, invariants, spatial_tangent
-from soilwater.linalg.backends import available
-from soilwater.case.loader import load_case
 
 CASE = "unconfined-compression"
 #: Node jitters of the ensemble, as fractions of the nodal spacing (0: the built-in nodes).
 JITTERS = (0.0, 1e-12, 1e-9, 1e-6)
-#: ERR of a homogeneous run below this is the noise of the Newton tolerance (measured
-#: 3e-7 to 5e-6 with SuperLU and PARDISO on the 111-node specimen): its digits depend on
-#: the linear solver and are reported only as "below".
-ERR_NOISE = 1e-5
-#: A member has departed from the homogeneous solution once its ERR exceeds this, a
-#: hundred times the noise.
-DEPARTURE = 100 * ERR_NOISE
-
-
-def continuum_onset(case=CASE, strain=0.2, points=400):
-    """Rudnicki-Rice indicator along the driver's undrained plane-strain path of a case.
-
-    The specimen's homogeneous state has a free lateral surface (total ``sigma_xx = 0``),
-    so the total stress is ``sigma' - sigma'_xx I``.
-
-    Returns
-    -------
-    pandas.DataFrame
-        ``strain`` (axial, logarithmic), ``eta_over_M`` (q / (M p')), ``indicator``
-        (:func:`soilwater.diagnostics.bifurcation.ellipticity` over the initial P-wave modulus) and
-        ``band_angle``: the band normal's inclination from the x axis folded to 0-90
-        degrees (the bands at +a and -a are mirror images).
-    """
-    clay = load_case(case).material()
-    raw, tangents = continuum_path(clay, "undrained-plane-strain", strain, points)
-    effective = raw[["sxx", "syy", "szz", "sxy"]].to_numpy()
-    total = effective - effective[:, :1] * np.array([1.0, 1.0, 1.0, 0.0])
-    value, angle = ellipticity(spatial_tangent(tangents, in_plane(effective),
-                                               in_plane(total)))
-    p, q = invariants(effective)
-    return pd.DataFrame({"strain": -raw.eyy.to_numpy(), "eta_over_M": q / (clay.M * p),
-                         "indicator": value / clay.constrained_modulus(),
-                         "band_angle": np.minimum(angle, 180.0 - angle)})
-
-
-def solvers():
-    """The linear solvers of the ensemble: SuperLU, and PARDISO where it is installed."""
-    return ("superlu", "pardiso") if available("pardiso") else ("superlu",)
 
 
 def ensemble(runs=PATH_RUNS, jitters=JITTERS, linear_solvers=None):
@@ -100,7 +59,7 @@ def ensemble(runs=PATH_RUNS, jitters=JITTERS, linear_solvers=None):
 
 def _perturbation(jitter):
     """Overrides of a member: on the built-in nodes those of the report's own runs
-    (:data:`soilwater.studies.verification.study.UNIQUENESS`, so they share the cache), else jittered
+    (:data:`soilwater.studies.harness.runs.UNIQUENESS`, so they share the cache), else jittered
     nodes."""
     if jitter == 0:
         return UNIQUENESS[CASE]

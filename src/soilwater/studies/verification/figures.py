@@ -1,45 +1,12 @@
-"""Figures of the report, one function per figure; each saves a PNG and returns its path."""
+"""Figures of the verification sections: the problems, shape functions, background cells,
+cantilever convergence and the stress paths of Figs. 4 and 6; each saves a PNG and
+returns its path."""
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from soilwater.material.driver import closed_form_q, run_test  # noqa: E402
-from soilwater.material.presets import material_from_spec  # noqa: E402
-from soilwater.efg.settings import DEFAULT_SCALE  # noqa: E402
-
-
-def stress_paths_driver(path, preset="table1", strain=0.3):
-    """q/p'0 against p'/p'0 from the stress-point driver, closed forms drawn over.
-
-    Two panels (undrained plane strain, undrained simple shear), original and modified
-    Cam-clay, normally consolidated at p'0.
-    """
-    tests = {"undrained-plane-strain": "Undrained plane strain (D$_{22}$ = -D$_{11}$)",
-             "undrained-simple-shear": "Undrained simple shear (L$_{12}$)"}
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.4), sharey=True, constrained_layout=True)
-    for ax, (test, title) in zip(axes, tests.items()):
-        for model, colour in (("original", "C0"), ("modified", "C3")):
-            clay = material_from_spec({"preset": preset, "model": model})
-            table = run_test(clay, test, strain)
-            p, q = table.p / clay.p0, table.q / clay.p0
-            ax.plot(p, q, color=colour, lw=2, label=f"{model} Cam-clay, driver")
-            pc = np.linspace(p.min(), 1.0, 14) * clay.p0
-            ax.plot(pc / clay.p0, closed_form_q(clay, pc) / clay.p0, "o", mfc="none",
-                    color="k", ms=5, label="closed form" if model == "modified" else None)
-        pl = np.array([0.0, 1.05])
-        ax.plot(pl, clay.M * pl, "k--", lw=1, label=f"critical state q = {clay.M} p'")
-        ax.set(title=f"{title}, to {strain:g} strain", xlabel="p'/p'$_0$",
-               xlim=(0, 1.05), ylim=(0, 1.05))
-        ax.grid(alpha=0.3)
-    axes[0].set_ylabel("q/p'$_0$")
-    axes[1].legend(loc="upper left", fontsize=9)
-    fig.suptitle("Table 1 clay, normally consolidated: stress-point driver vs closed form")
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
+from soilwater.efg.settings import DEFAULT_SCALE
+from soilwater.studies.harness.runs import run_style
 
 
 def background_cells(path):
@@ -203,7 +170,7 @@ def stress_paths(table, path):
         ax.plot(np.r_[1.0, first.p_driver], np.r_[0.0, first.q_driver], "k-", lw=4,
                 alpha=0.3, label="stress-point driver (theory)")
         for k, (run, group) in enumerate(part.groupby("run", sort=False)):
-            ax.plot(np.r_[1.0, group.p], np.r_[0.0, group.q], lw=1.3, label=run, **_style(k))
+            ax.plot(np.r_[1.0, group.p], np.r_[0.0, group.q], lw=1.3, label=run, **run_style(k))
         ax.set(xlabel="p'/p'$_0$", ylabel="q/p'$_0$", xlim=(0.45, 1.05), ylim=(0, 0.85),
                title=f"{case}: stress path (nodal or domain averages)")
         ax.grid(alpha=0.3)
@@ -219,92 +186,11 @@ def err_history(table, path, case="unconfined-compression"):
     fig, ax = plt.subplots(figsize=(6.6, 4.6), constrained_layout=True)
     for k, (run, group) in enumerate(part.groupby("run", sort=False)):
         ax.semilogy(group.strain * 100, group.err.clip(lower=1e-12), lw=1.3, label=run,
-                    **_style(k))
+                    **run_style(k))
     ax.set(xlabel="axial strain (%)", ylabel="ERR (paper eq. 1), floor 1e-12",
            title="Unconfined compression: error of the nodal stretching D$_{22}$")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
-
-
-def _style(k):
-    """Line style of the k-th run: colours for cells/methods, dashes for variants."""
-    ls, color = [("-", "C0"), ("--", "C1"), (":", "C0"), (":", "C1"), ("-", "C2"),
-                 ("-.", "C3")][k % 6]
-    return {"ls": ls, "color": color}
-
-
-def column_profiles(table, path):
-    """Pore pressure along the column after the first step, one panel per run."""
-    runs = list(dict.fromkeys(table.run))
-    cols = 4
-    rows = -(-len(runs) // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 4.2 * rows), sharey=True,
-                             constrained_layout=True, squeeze=False)
-    for ax, run in zip(axes.flat, runs):
-        part = table[table.run == run]
-        ax.plot(part.reference, part.y, "k-", lw=3, alpha=0.3, label="Terzaghi, initial "
-                "stiffness")
-        ax.plot(part.p_w, part.y, "o-", ms=3, color="C3", label="p$_w$ on the axis")
-        ax.set(title=run, xlabel="p$_w$ / load", xlim=(-0.6, 2.2))
-        ax.axvline(1.0, color="k", lw=0.5, ls=":")
-        ax.grid(alpha=0.3)
-    for ax in axes.flat[len(runs):]:
-        ax.set_visible(False)
-    for ax in axes[:, 0]:
-        ax.set_ylabel("height y (m)")
-    axes.flat[0].legend(fontsize=7, loc="lower left")
-    fig.suptitle("Soil column (paper Fig. 8), first step of 40 s: h$^2$/(c$_v$ dt) = 30")
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
-
-
-def consolidation(terzaghi_table, mandel_table, path, times=(0.1, 0.5, 1.0, 3.0)):
-    """Verification: Terzaghi isochrones and Mandel's centre pressure, EFG and FEM.
-
-    Tables from :func:`soilwater.studies.verification.study.consolidation_histories`.
-    """
-    from soilwater.studies.verification.study import mandel_centre
-    from soilwater.references.closed_forms import terzaghi as series
-    from soilwater.references.closed_forms import undrained_pressure
-    from soilwater.case.loader import load_case
-
-    case = load_case("terzaghi")
-    material, fluid, height = case.material(), case.fluid, case.geometry.height
-    args = (height, material.constrained_modulus(), fluid.biot_alpha, fluid.storage,
-            fluid.mobility)
-    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.6), constrained_layout=True)
-    y = np.linspace(0, height, 101)
-    p0 = undrained_pressure(1.0, *args[1:4])                                # unit load
-    markers = {"EFG (5 x 41 nodes)": "o", "fem-q1q1": "s", "fem-th": "^",
-               "MOOSE Q1/Q1 (peer)": "x"}
-    for k, t in enumerate(times):
-        exact, _ = series(y, t, 1.0, *args)
-        left.plot(exact / p0, y, "-", color=f"C{k}", lw=2, alpha=0.4,
-                  label=f"closed form, t = {t:g}")
-        for run, marker in markers.items():
-            part = terzaghi_table[terzaghi_table.run == run]
-            nearest = part.time.iloc[np.argmin(np.abs(part.time.to_numpy() - t))]
-            at = part[part.time == nearest]
-            left.plot(at.p, at.y, marker, color=f"C{k}", ms=4, mfc="none",
-                      label=run if k == 0 else None)
-    left.set(xlabel="p$_w$ / p$_0$ (undrained)", ylabel="height above the base (m)",
-             title="Terzaghi (peer case A): isochrones")
-    left.legend(fontsize=7, loc="lower left")
-    for k, (run, part) in enumerate(mandel_table.groupby("run", sort=False)):
-        right.semilogx(part.time, part.p_centre, ["o", "s", "^"][k % 3], ms=3, mfc="none",
-                       label=run)
-    fine = np.geomspace(mandel_table.time.min(), mandel_table.time.max(), 400)
-    right.semilogx(fine, mandel_centre(fine), "k-", lw=2, alpha=0.5, label="closed form")
-    right.axhline(1.0, color="k", lw=0.5, ls=":")
-    right.set(xlabel="time (s)", ylabel="p$_w$ at the centre / (F / 2a)",
-              title="Mandel: the Mandel-Cryer rise above the undrained value")
-    right.legend(fontsize=8)
-    for ax in (left, right):
-        ax.grid(alpha=0.3, which="both")
     fig.savefig(path, dpi=150)
     plt.close(fig)
     return path
@@ -368,74 +254,3 @@ def _edge(ax, case, name, edge, size):
         t = t / np.abs(t).max() * size * 1.5
         ax.quiver(xs - t[0], ys - t[1], t[0] + 0 * xs, t[1] + 0 * ys, color="C1",
                   angles="xy", scale_units="xy", scale=1, width=0.02)
-
-
-def uniqueness(members, continuum, path):
-    """The discrete uniqueness indicator of every run against strain, with the continuum
-    (Rudnicki-Rice) indicator along the driver's path; symmetric-log axis (both cross
-    zero by a few 1e-4 of the modulus)."""
-    fig, ax = plt.subplots(figsize=(7.2, 4.8), constrained_layout=True)
-    ax.plot(continuum.strain * 100, continuum.indicator, "k-", lw=4, alpha=0.3,
-            label="continuum (acoustic tensor), driver path")
-    base = members[members.jitter == 0]
-    for k, (run, group) in enumerate(base.groupby("run", sort=False)):
-        first = group[group.solver == group.solver.iloc[0]]
-        ax.plot(first.strain * 100, first.uniqueness, lw=1.3, label=run, **_style(k))
-    ax.axhline(0.0, color="k", lw=0.6)
-    ax.set_yscale("symlog", linthresh=1e-4)
-    ax.set(xlabel="axial strain (%)", ylabel="smallest eigenvalue / P-wave modulus",
-           title="Unconfined compression: uniqueness of the undrained solution\n"
-           "(discrete: tangent on the undrained constraint; below zero uniqueness is not "
-           "guaranteed)")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
-
-
-def bifurcation_ensemble(members, summary, path):
-    """ERR of every ensemble member (jittered nodes, both linear solvers) per run: the
-    band between the smallest and the largest member, the members as thin lines, the
-    discrete and continuum onsets as vertical lines."""
-    runs = list(dict.fromkeys(members.run))
-    fig, axes = plt.subplots(2, -(-len(runs) // 2), figsize=(12, 6.8), sharex=True,
-                             sharey=True, constrained_layout=True, squeeze=False)
-    onsets = summary.set_index("run")
-    for ax, run in zip(axes.T.flat, runs):
-        part = members[members.run == run]
-        band = part.groupby("step").agg(strain=("strain", "mean"), low=("err", "min"),
-                                        high=("err", "max"))
-        ax.fill_between(band.strain * 100, band.low.clip(lower=1e-9),
-                        band.high.clip(lower=1e-9), color="C0", alpha=0.25,
-                        label="ensemble band")
-        for (jitter, solver), m in part.groupby(["jitter", "solver"]):
-            ax.plot(m.strain * 100, m.err.clip(lower=1e-9), lw=0.7,
-                    color="C1" if solver == "pardiso" else "C0",
-                    ls={0.0: "-", 1e-12: "--", 1e-9: "-.", 1e-6: ":"}.get(jitter, "-"))
-        row = onsets.loc[run]
-        if np.isfinite(row.onset):
-            ax.axvline(row.onset * 100, color="C3", lw=1, label="discrete onset")
-        ax.axvline(row.continuum_onset * 100, color="k", lw=1, ls=":",
-                   label="continuum onset")
-        ax.set_yscale("log")
-        ax.set(title=run, ylim=(1e-9, 10))
-        ax.grid(alpha=0.3, which="both")
-    for ax in axes.flat[len(runs):]:
-        ax.set_visible(False)
-    for ax in axes[-1]:
-        ax.set_xlabel("axial strain (%)")
-    for ax in axes[:, 0]:
-        ax.set_ylabel("ERR (paper eq. 1), floor 1e-9")
-    labels = {}
-    for ax in axes.flat:
-        labels.update(zip(*reversed(ax.get_legend_handles_labels())))
-    fig.legend(list(labels.values()), list(labels), loc="outside lower center", fontsize=8,
-               ncols=3)
-    fig.suptitle("Unconfined compression: ERR of every ensemble member (blue SuperLU, "
-                 "orange PARDISO; line style: node jitter 0, 1e-12, 1e-9, 1e-6 of the "
-                 "spacing)", fontsize=10)
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
-

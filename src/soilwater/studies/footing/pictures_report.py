@@ -1,0 +1,87 @@
+"""The strip footing's pictures in the report: deformed configurations, pore pressure
+and animations (:mod:`soilwater.studies.footing.pictures`)."""
+
+from pathlib import Path
+
+from soilwater.geometry.quality import DISTORTED
+from soilwater.studies.footing.pictures import (EDGE_RADIUS, LEVEL_PERCENTILES, ZOOM,
+                                                animations, deformed_figure, frames,
+                                                measures, pore_pressure_figure, runs)
+from soilwater.studies.harness import tables
+
+NAME = "footing-pictures"
+
+
+def run(root, inputs):
+    """Runs the footing on the built-in nodes (:func:`~soilwater.studies.footing.
+    pictures.runs`) and writes its pictures; returns :func:`write`'s data."""
+    data, _ = write(root, runs())
+    return data
+
+
+def section(data):
+    """The report's lines on the pictures from :func:`write`'s data."""
+    table = data["footing deformation"]
+    fem = table[table.distorted != ""]
+    nx, ny = data["grid"]
+    snapshots = data["snapshots"]
+    gifs = " ".join(f"![{m}](figures/footing_{m}.gif)" for m in snapshots)
+    return [
+        "### Strip footing: deformed configurations, pore pressure, animations",
+        "",
+        "![deformed configurations](figures/footing_deformed.png)",
+        "",
+        f"The runs on {nx} x {ny} nodes at their last level, {ZOOM:g} B x {ZOOM:g} B "
+        "next to the footing, coloured by the shear strain eps_s = sqrt(2/3 e':e') of "
+        "the Hencky strain (e' its deviator, plane strain) of each triangle of the "
+        "initial nodes (FEM: its elements' corners; EFG: the Delaunay triangles of its "
+        "initial nodes, the dots showing area-weighted nodal averages). The largest "
+        f"eps_s within {EDGE_RADIUS:g} B of the footing's edge: "
+        + ", ".join(f"{r.method} {r.eps_s_edge:.3g}" for r in table.itertuples())
+        + ". Elements outlined in red are distorted, their smallest angle below "
+        f"{DISTORTED:.2g} of its undeformed value: "
+        + ("; ".join(f"{r.method} {r.distorted} at the last level ({r.inverted} "
+                     "inverted)" for r in fem.itertuples()) if len(fem) else "no FEM run")
+        + ".",
+        "",
+        "![excess pore pressure](figures/footing_pore_pressure.png)",
+        "",
+        "Excess pore pressure p_w - p_w0 (kPa, compression positive) on the deformed "
+        "configuration at the last level; in view it ranges over "
+        + "; ".join(f"{r.method} {r.dp_min:.3g} to {r.dp_max:.3g} kPa"
+                    for r in table.itertuples())
+        + " (the contour levels span percentiles {:g} to {:g} of all of them; beyond, "
+        "the end colours).".format(*LEVEL_PERCENTILES),
+        "",
+        gifs,
+        "",
+        "Each method's deformation (" + ", ".join(
+            f"{m} {len(frames(n))} of its {n}" for m, n in snapshots.items())
+        + " snapshots; one colour scale), the settlement and "
+        "contact pressure in the title.",
+        "",
+    ]
+
+
+def write(root, results):
+    """The pictures of ``results`` (:func:`runs`) under ``root``: ``tables/
+    footing_deformation`` (:func:`measures`), the figures ``footing_deformed`` and
+    ``footing_pore_pressure`` and one animation per method.
+
+    Returns
+    -------
+    data : dict
+        ``"footing deformation"`` (the table), ``"grid"`` (nodes ``(nx, ny)``) and
+        ``"snapshots"`` (method -> number of snapshots): what :func:`section` reads.
+    written : list of pathlib.Path
+    """
+    root = Path(root)
+    grid = results[0].case.discretisation
+    data = {"footing deformation": measures(results), "grid": (grid.nx, grid.ny),
+            "snapshots": {r.method: len(r.snapshots) for r in results}}
+    written = [*tables.write(data["footing deformation"],
+                             root / "tables" / "footing_deformation"),
+               deformed_figure(results, root / "figures" / "footing_deformed.png"),
+               pore_pressure_figure(results, root / "figures" / "footing_pore_pressure.png"),
+               *animations(results, root / "figures")]
+    return data, written

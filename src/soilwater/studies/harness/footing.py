@@ -1,0 +1,27 @@
+"""The strip footing's methods and width, shared by the footing studies and the
+essential-conditions study."""
+
+
+#: The built-in case of the strip-footing studies.
+CASE = "strip-footing"
+
+
+#: The methods of the study (label: method and overrides): the three of the paper's
+#: comparison, EFG with Nitsche's essential conditions in place of the paper's penalty
+#: (``efg.essential``: the penalty's tie stiffens the footing) and Taylor-Hood re-meshed
+#: when its mesh degrades (``fem.remesh``; P1/P1's elements stay above the re-meshing
+#: threshold to 1 B, so it would not re-mesh).
+METHODS = {"efg": ("efg", ()), "efg+nitsche": ("efg", ("efg.essential=nitsche",)),
+           "fem-th": ("fem-th", ()), "fem-p1p1-stab": ("fem-p1p1-stab", ()),
+           "fem-th+remesh": ("fem-th", ("fem.remesh=delaunay",))}
+
+
+#: The methods of :data:`METHODS` without overrides, whose labels are their method names
+#: (the paper's comparison): the partially drained footing and the pictures run these.
+PLAIN = {label: spec for label, spec in METHODS.items() if not spec[1]}
+
+
+def width(case):
+    """Footing width B [m]: twice the segment (the case is the symmetry half)."""
+    (_, footing), = case.boundary.segments()
+    return 2 * (footing.end - footing.start)

@@ -1,0 +1,83 @@
+"""The verdicts on the paper's claims: one table judged on the numbers of several
+studies (``NEEDS``), after their sections."""
+
+from soilwater.studies.harness.runs import ERR_NOISE
+from soilwater.studies.stability.findings import pair
+
+#: The studies whose saved data the verdicts read.
+NEEDS = ("verification", "uniqueness", "stability", "consolidation", "footing")
+
+
+def section(data):
+    """The verdicts' lines from the studies' saved data (name -> data); a line naming
+    the studies not run yet in place of the table if any is missing."""
+    missing = [n for n in NEEDS if n not in data]
+    if missing:
+        return ["## Verdicts on the paper's claims", "",
+                f"*Not judged yet: studies {', '.join(missing)} have not been run.*", ""]
+    v, u, s, c = (data[n] for n in ("verification", "uniqueness", "stability",
+                                    "consolidation"))
+    uc = v["path summary"].set_index(["case", "run"]).loc["unconfined-compression"]
+    return claims(uc, u["bifurcation"].set_index("run"), s["infsup slopes"],
+                  s["column stability"], s["table2"],
+                  c["efg consolidation"].set_index(["case", "metric"]).value,
+                  c["fem terzaghi"].set_index(["method", "steps"]),
+                  data["footing"]["verdict"])
+
+
+def claims(uc, bif, fits, col, t2, ec, ft, foot):
+    """The paper's claims, each with its verdict and the measurement behind it."""
+    sq, de = (uc.loc[f"EFG, {c}, plain Gauss"] for c in ("squares", "Delaunay"))
+    better = sq.err_before > de.err_before and sq.path_error_before > de.path_error_before
+    vci = bif.loc[["EFG, square cells", "EFG, Delaunay cells"], "err_before"]
+    plain = fits[(fits.method == "efg") & ~fits.weights.str.contains("+", regex=False)
+                 & (fits.boundary == "dirichlet")]
+    fem = fits.set_index(["method", "boundary"]).slope
+    undrained, seeping = (t2[t2.permeability == 0], t2[t2.permeability > 0])
+    col5 = col[(col.nodes == "5x41") & (col.permeability > 0)].set_index("method").interior
+    return [
+        "## Verdicts on the paper's claims",
+        "",
+        "| claim | verdict | measured here |",
+        "|---|---|---|",
+        "| Delaunay background cells are more accurate than square cells (Figs. 4, 6) | "
+        + ("supported" if better else "refuted") + " | with the paper's plain Gauss "
+        f"quadrature, before any loss of uniqueness: ERR {sq.err_before:.2g} (squares) "
+        f"against {de.err_before:.2g} (Delaunay), path error {sq.path_error_before:.2g} "
+        f"against {de.path_error_before:.2g} p'0. With VCI both are at the Newton noise ("
+        + ("below " if vci.max() < ERR_NOISE else "up to ")
+        + f"{max(vci.max(), ERR_NOISE):g}): the difference is the quadrature's |",
+        "| Some MLS weight combinations and densities give stable equal-order pore "
+        "pressures (Table 2): in the inf-sup sense | "
+        + ("supported" if plain.stable.any() else "refuted")
+        + " | with v = 0 on the boundary no unstabilised EFG setting levels off: last "
+        f"slopes {plain.slope.min():.2f} to {plain.slope.max():.2f} (Taylor-Hood "
+        f"{fem[('fem-th', 'dirichlet')]:.2f}, P1/P1 {fem[('fem-p1p1', 'dirichlet')]:.2f})"
+        " |"
+        if not plain.stable.any() else
+        "| Some MLS weight combinations and densities give stable equal-order pore "
+        "pressures (Table 2): in the inf-sup sense | supported | passing: "
+        + ", ".join(pair(r) for r in plain[plain.stable].itertuples()) + " |",
+        "| ... and in practice, undrained (k = 0, first-step interior pollution, Table 2 "
+        "sweep) | " + ("supported for " + ", ".join(
+            f"{r.weights} x{r.scale:g}" for r in undrained[
+                undrained.rating == "good"].itertuples())
+            if (undrained.rating == "good").any() else "refuted: none rates good")
+        + f" | {len(undrained)} settings, {undrained.nodes_per_support.min():.0f} to "
+        f"{undrained.nodes_per_support.max():.0f} nodes per support: "
+        f"{undrained.interior.min():.2g} to {undrained.interior.max():.2g} of the load "
+        "(ratings " + "/".join(sorted(set(undrained.rating))) + "); E-A/E-B, the paper's "
+        f"good, {undrained[undrained.weights == 'E-A/E-B'].interior.min():.2g} to "
+        f"{undrained[undrained.weights == 'E-A/E-B'].interior.max():.2g} |",
+        "| ... and at a finite permeability (h²/(c_v dt) = 30, 5 x 41 nodes) | open | EFG "
+        f"{seeping.interior.min():.2g} to {seeping.interior.max():.2g} "
+        f"of the load against P1/P1 {col5['fem-p1p1']:.2g} and Taylor-Hood "
+        f"{col5['fem-th']:.2g} |",
+        "| EFG solves coupled consolidation as accurately as FEM (Terzaghi, Mandel) | "
+        "supported | Terzaghi for t >= 0.1: EFG "
+        f"{ec.loc[('terzaghi', 'max_error_load_after_0.1')]:.3f} of the load, fem-th "
+        f"{ft.loc[('fem-th', 'moose'), 'error_p0_after_0.1']:.3f} p0 (same steps) |",
+        "| EFG handles large, non-uniform deformation where FEM meets mesh distortion "
+        "(introduction) | " + " | ".join(foot) + " |",
+        "",
+    ]

@@ -1,0 +1,186 @@
+"""``soilwater report``: one shape for every study, ``--only``, stale sections, and the
+studies kept apart from the library and from each other.
+
+The report tests run on a fake registry of two trivial studies (each writes a table and
+counts its runs); no real study runs here.
+"""
+
+import ast
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+import soilwater
+from soilwater.cli import main
+from soilwater.errors import SoilwaterError
+from soilwater.studies import registry
+from soilwater.studies import report
+from soilwater.studies.harness import study as store
+
+STUDIES = Path(soilwater.__file__).parent / "studies"
+TRIVIAL = '''
+import pandas as pd
+
+from soilwater.studies.harness import tables
+
+NAME = "{name}"
+RUNS = []
+
+
+def run(root, inputs):
+    RUNS.append(root)
+    table = pd.DataFrame({{"x": [1.0, 2.0]}})
+    tables.write(table, root / "tables" / "{name}")
+    return {{"value": len(RUNS)}}
+
+
+def section(data):
+    return ["## Study {name}", "", f"{name} value {{data['value']}}", ""]
+'''
+
+
+@pytest.fixture
+def fake(tmp_path, monkeypatch):
+    """Two trivial studies, ``alpha`` and ``beta``, each in its own folder; returns the
+    report root."""
+    for name in ("alpha", "beta"):
+        folder = tmp_path / "fake" / f"fake_{name}"
+        folder.mkdir(parents=True)
+        (folder / "__init__.py").write_text("")
+        (folder / "report.py").write_text(TRIVIAL.format(name=name))
+    monkeypatch.syspath_prepend(str(tmp_path / "fake"))
+    monkeypatch.setattr(registry, "STUDIES", {
+        name: store.Study(name, f"fake_{name}.report") for name in ("alpha", "beta")})
+    yield tmp_path / "reports"
+    for name in ("alpha", "beta"):
+        sys.modules.pop(f"fake_{name}.report", None)
+        sys.modules.pop(f"fake_{name}", None)
+
+
+def runs(name):
+    return sys.modules[f"fake_{name}.report"].RUNS
+
+
+def test_a_full_report_runs_every_study_and_records_its_code(fake):
+    written = report.make_report(fake)
+    text = (fake / "REPORT.md").read_text()
+    assert "alpha value 1" in text and "beta value 1" in text
+    assert (fake / "tables" / "alpha.csv").exists() and (fake / "tables" / "beta.md").exists()
+    assert fake / "REPORT.md" in written
+    meta = store.load(fake, "alpha").meta
+    assert meta["code"] == store.inputs_hash(registry.STUDIES["alpha"], registry.STUDIES)
+    assert f"made from code `{meta['code'][:7]}`" in text
+    assert "Stale" not in text
+
+
+def test_only_reruns_the_named_study_and_keeps_the_others_output(fake):
+    report.make_report(fake)
+    beta = (fake / "studies" / "beta.pkl").read_bytes(), (fake / "studies" / "beta.json").read_text()
+    report.make_report(fake, only="alpha")
+    assert len(runs("alpha")) == 2 and len(runs("beta")) == 1
+    assert ((fake / "studies" / "beta.pkl").read_bytes(),
+            (fake / "studies" / "beta.json").read_text()) == beta
+    text = (fake / "REPORT.md").read_text()
+    assert "alpha value 2" in text and "beta value 1" in text
+    assert "Stale" not in text
+
+
+def test_a_changed_source_marks_the_section_stale(fake):
+    report.make_report(fake)
+    source = Path(sys.modules["fake_beta.report"].__file__)
+    source.write_text(source.read_text() + "\n# an edit\n")
+    report.make_report(fake, only="alpha")
+    text = (fake / "REPORT.md").read_text()
+    beta = text[text.index("## Study beta"):]
+    assert "**Stale**" in beta and "--only beta" in beta
+    assert "**Stale**" not in text[:text.index("## Study beta")]
+
+
+def test_a_study_not_run_yet_says_so(fake):
+    report.make_report(fake, only="beta")
+    text = (fake / "REPORT.md").read_text()
+    assert "beta value 1" in text
+    assert "Study `alpha` has not been run yet" in text
+
+
+def test_unknown_studies_are_refused_in_one_line(fake, capsys):
+    with pytest.raises(SoilwaterError, match="unknown study gamma") as err:
+        report.make_report(fake, only="alpha,gamma")
+    assert "\n" not in str(err.value) and "alpha, beta" in str(err.value)
+    assert main(["report", "--out", str(fake), "--only", "gamma"]) == 2
+    out = capsys.readouterr().err.strip()
+    assert len(out.splitlines()) == 1 and "use one or more of alpha, beta" in out
+    assert not (fake / "studies").exists()
+
+
+def test_the_registry_names_each_study_once_with_its_interface():
+    for name, study in registry.STUDIES.items():
+        module = study.load()
+        assert module.NAME == name
+        assert callable(module.run) and callable(module.section)
+        assert set(module.__dict__.get("NEEDS", ())) <= set(registry.STUDIES)
+
+
+def _imports(path):
+    """Absolute module names imported anywhere in a file (lazy imports included)."""
+    names = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names += [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            names.append(node.module)
+    return names
+
+
+def test_no_study_folder_imports_another():
+    folders = {p.name for p in STUDIES.iterdir() if (p / "__init__.py").exists()}
+    found = []
+    for folder in sorted(folders - {"harness"}):
+        for path in sorted((STUDIES / folder).rglob("*.py")):
+            for name in _imports(path):
+                parts = name.split(".")
+                if (parts[:2] == ["soilwater", "studies"] and len(parts) > 2
+                        and parts[2] in folders - {"harness", folder}):
+                    found.append(f"{path.relative_to(STUDIES)} imports {name}")
+    assert not found
+
+
+def test_nothing_outside_the_studies_imports_them():
+    """Only the CLI's ``report``, ``check`` and ``bench`` commands reach the studies, and
+    lazily (inside the function of the command)."""
+    package = STUDIES.parent
+    found = []
+    for path in sorted(package.rglob("*.py")):
+        if path.relative_to(package).parts[0] == "studies":
+            continue
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.FunctionDef) and path.name == "cli.py" and \
+                    node.name in ("_report", "_check", "_bench"):
+                node.body = []          # the commands' lazy imports are allowed
+        for node in ast.walk(tree):
+            modules = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                       [node.module] if isinstance(node, ast.ImportFrom) else [])
+            found += [f"{path.relative_to(package)} imports {m}" for m in modules
+                      if m and m.startswith("soilwater.studies")]
+    assert not found
+
+
+def test_importing_the_studies_leaves_the_matplotlib_backend_alone():
+    modules = sorted(".".join(p.relative_to(STUDIES.parents[1]).with_suffix("").parts)
+                     for p in STUDIES.rglob("*.py") if p.name != "__init__.py")
+    code = textwrap.dedent(f"""
+        import importlib, matplotlib
+        matplotlib.use("svg")
+        for name in {modules!r}:
+            importlib.import_module(name)
+        print(matplotlib.get_backend())
+    """)
+    env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env=env, check=True).stdout
+    assert out.strip() == "svg"
