@@ -119,8 +119,8 @@ class ShapeFunctions:
         points : array_like, shape (n_points, 2)
             Evaluation points [m].
         weight : str or Weight
-            A name read by :meth:`soilwater.efg.settings.Weight.parse`: ``quartic`` (``Q``), ``cubic``
-            or ``exp:C`` (``E-A`` = ``exp:0.5``, ``E-B`` = ``exp:0.25``).
+            A name read by :meth:`soilwater.efg.settings.Weight.parse`: ``quartic``
+            (``Q``), ``cubic`` or ``exp:C`` (``E-A`` = ``exp:0.5``, ``E-B`` = ``exp:0.25``).
         scale : float
             Scale factor of the supports, ``d_mJ = scale x d_J`` (usually 1.2 to 1.5).
         key : str

@@ -24,8 +24,9 @@ from collections import namedtuple
 import numba
 import numpy as np
 
-#: A clay's parameters as the numba functions read them (:attr:`~soilwater.material.camclay.CamClay.constants`):
-#: ``modified`` (bool), M, lambda, kappa and MD.
+#: A clay's parameters as the numba functions read them
+#: (:attr:`~soilwater.material.camclay.CamClay.constants`): ``modified`` (bool), M,
+#: lambda, kappa and MD.
 Constants = namedtuple("Constants", "modified M lam kappa MD")
 
 #: numba options of every function here: division by zero gives inf or nan (a diverging
