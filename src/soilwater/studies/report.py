@@ -20,8 +20,8 @@ from soilwater.studies.harness import study as store
 
 
 def select(only):
-    """The names of the studies to run: all for None, else those of ``only``
-    (``"NAME[,NAME]"``).
+    """The names of the studies to run, in report order: all for None, else those of
+    ``only`` (``"NAME[,NAME]"``).
 
     Raises
     ------
@@ -35,7 +35,7 @@ def select(only):
     if unknown or not names:
         raise SoilwaterError(f"--only {only!r}: unknown study {', '.join(unknown) or '(none)'}"
                              f"; use one or more of {', '.join(registry.STUDIES)}")
-    return names
+    return [name for name in registry.STUDIES if name in names]
 
 
 def make_report(root="reports", only=None):
