@@ -9,7 +9,7 @@ from soilwater.studies.consolidation.study import mandel_centre
 def consolidation(terzaghi_table, mandel_table, path, times=(0.1, 0.5, 1.0, 3.0)):
     """Verification: Terzaghi isochrones and Mandel's centre pressure, EFG and FEM.
 
-    Tables from :func:`soilwater.studies.verification.study.consolidation_histories`.
+    Tables from :func:`soilwater.studies.consolidation.study.consolidation_histories`.
     """
     from soilwater.references.closed_forms import terzaghi as series
     from soilwater.references.closed_forms import undrained_pressure

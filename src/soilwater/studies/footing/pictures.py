@@ -54,7 +54,7 @@ PRESSURE_LABEL = "excess pore pressure p_w - p_w0 [kPa], compression positive"
 def runs(core=CORE, methods=PLAIN):
     """The footing study's runs of each method with ``core`` spacings per B at the
     footing (through the cached runner: the runs of :func:`soilwater.studies.footing.study.curves`
-    are reused). The default, :data:`soilwater.studies.footing.study.PLAIN`, leaves out re-meshed
+    are reused). The default, :data:`soilwater.studies.harness.footing.PLAIN`, leaves out re-meshed
     Taylor-Hood: its pictures and GIF would carry the name of its method, ``fem-th``,
     and the elements drawn would be its initial mesh's, not the re-meshed ones.
 

@@ -1,7 +1,7 @@
 """The partially drained strip footing: the built-in ``strip-footing-consolidation``
 (the footing of ``strip-footing`` loaded in 10 s to half Prandtl's pressure, then held
 while the clay, k = 1e-6 m/s, consolidates) by each method of
-:data:`soilwater.studies.footing.study.PLAIN` on the built-in nodes (a label with overrides, such
+:data:`soilwater.studies.harness.footing.PLAIN` on the built-in nodes (a label with overrides, such
 as ``fem-th+remesh``, is not a method name).
 
 Right after loading the clay has had no time to drain, so the footing must have settled

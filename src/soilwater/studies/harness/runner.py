@@ -7,8 +7,9 @@ returns one :class:`Outcome` per job, in order. A job that fails is an outcome w
 error; the others complete.
 
 Results are cached on disk under a key hashing the resolved case, the method, the linear
-solver (name and version, :func:`soilwater.linalg.backends.identity`) and the source code of the solvers
-(so any change to ``soil/``, ``efg/`` or ``fem_reference/`` invalidates the cache):
+solver (name and version, :func:`soilwater.linalg.backends.identity`) and the source code
+the method's solver is made of (:func:`code_version`: the library outside ``studies/``,
+with ``efg/`` for EFG and ``fem/`` for the FEM pairs; a change there invalidates it):
 rerunning a report only recomputes what changed, and a result made with one linear solver
 is never reused for another.
 """
