@@ -34,13 +34,13 @@ def solved(specs):
     Raises
     ------
     SoilwaterError
-        If any run failed (a verification table needs them all).
+        If any run failed (a study's table needs them all), naming the first.
     """
     outcomes = runner.run([runner.Job(spec[0], spec[2] if len(spec) > 2 else "efg",
                                       tuple(spec[1])) for spec in specs], progress=False)
     failed = [o for o in outcomes if not o.ok]
     if failed:
-        raise SoilwaterError(f"{len(failed)} verification run(s) failed, first: "
+        raise SoilwaterError(f"{len(failed)} study run(s) failed, first: "
                              f"{failed[0].job.case} {' '.join(failed[0].job.overrides)}: "
                              f"{failed[0].error}")
     return [o.result for o in outcomes]
@@ -51,7 +51,8 @@ FEM_METHODS = ("fem-th", "fem-p1p1", "fem-p1p1-stab", "fem-q1q1", "fem-q2q1")
 
 
 def run_style(k):
-    """Line style of the k-th run: colours for cells/methods, dashes for variants."""
+    """Line style of the k-th run of :data:`PATH_RUNS` in a figure: colours for
+    cells/methods, dashes for variants."""
     ls, color = [("-", "C0"), ("--", "C1"), (":", "C0"), (":", "C1"), ("-", "C2"),
                  ("-.", "C3")][k % 6]
     return {"ls": ls, "color": color}
