@@ -66,6 +66,8 @@ class Scales:
     shear : float
         Shear modulus G of the initial state, the median over the nodes [kPa].
 
+    Notes
+    -----
     A step has converged when the displacement residual is below ``TOLERANCE x stress x
     h`` (force per unit thickness) and the continuity residual below ``TOLERANCE x
     stress x h^2 / modulus`` (volume per unit thickness).
