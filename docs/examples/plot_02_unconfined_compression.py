@@ -29,10 +29,9 @@ to stay within a minute.
 import matplotlib.pyplot as plt
 import pandas as pd
 
-from soilwater.case.loader import load_case
+import soilwater
 from soilwater.material.driver import run_test
 from soilwater.studies.harness.metrics import path_error
-from soilwater.studies.harness.runner import solver
 
 RUNS = {"EFG delaunay none": ("efg", ("efg.cells=delaunay", "efg.correction=none")),
         "EFG delaunay vci": ("efg", ("efg.cells=delaunay", "efg.correction=vci")),
@@ -40,8 +39,8 @@ RUNS = {"EFG delaunay none": ("efg", ("efg.cells=delaunay", "efg.correction=none
         "EFG squares vci": ("efg", ("efg.cells=squares", "efg.correction=vci")),
         "FEM taylor-hood": ("fem-th", ())}
 compression = {
-    label: solver(method)(load_case("unconfined-compression", ("time.steps=50", *extra)),
-                          progress=False)
+    label: soilwater.solve(soilwater.load_case("unconfined-compression", "time.steps=50",
+                                               *extra), method, progress=False)
     for label, (method, extra) in RUNS.items()}
 
 summary = pd.DataFrame(

@@ -24,9 +24,8 @@ the axis beyond that of a monotone profile, over the load; zero when monotone).
 import matplotlib.pyplot as plt
 import pandas as pd
 
-from soilwater.case.loader import load_case
+import soilwater
 from soilwater.studies.harness.metrics import axis_profile, oscillation_index, overshoot
-from soilwater.studies.harness.runner import solver
 from soilwater.studies.stability.study import stability_number
 
 RUNS = {"EFG Q/Q": ("efg", ("efg.weight_u=quartic", "efg.weight_p=quartic")),
@@ -34,8 +33,8 @@ RUNS = {"EFG Q/Q": ("efg", ("efg.weight_u=quartic", "efg.weight_p=quartic")),
         "EFG E-A/E-B": ("efg", ("efg.weight_u=exp:0.5", "efg.weight_p=exp:0.25")),
         "FEM p1p1": ("fem-p1p1", ()),
         "FEM taylor-hood": ("fem-th", ())}
-column = {label: solver(method)(load_case("soil-column", ("time.end=40.0", *extra)),
-                                progress=False)  # the first step only
+column = {label: soilwater.solve(soilwater.load_case("soil-column", "time.end=40.0", *extra),
+                                 method, progress=False)  # the first step only
           for label, (method, extra) in RUNS.items()}
 case = column["FEM taylor-hood"].case
 load = -case.boundary.top.traction[1]
