@@ -23,7 +23,7 @@ relative to its largest entry.
 ``python docs/krylov_study.py --orderings [nodes ...]`` (default 3e3 1e4; about 3
 minutes): SuperLU's factorisation of the first tangent of the bench step of EFG, fem-th,
 fem-q2q1 and fem-p1p1-stab with scipy's default column ordering (COLAMD) and with
-``soilwater.linalg.backends.SUPERLU_ORDERING``: time and the factor's entries.
+``soilwater.linalg.direct.SUPERLU_ORDERING``: time and the factor's entries.
 
 ``python docs/krylov_study.py --single [nodes ...]`` (default 3e4 1e5; about 20 minutes):
 PARDISO's factorisation of the first tangent of the bench step as the Krylov sizes run it
@@ -35,11 +35,11 @@ memory); then whole runs of the built-in cases (as ``--runs``, and EFG's with th
 perturbation too) with each: Newton iterations, factorisations, cut-backs, and the
 largest difference of p, q and the settlement relative to their range. Single precision
 is forced on every discretisation that suits an iterative solver
-(``soilwater.linalg.backends.Layout.iterative``), whether it asks for it (``Layout.single``) or not.
+(``soilwater.linalg.layout.Layout.iterative``), whether it asks for it (``Layout.single``) or not.
 
 ``python docs/krylov_study.py --newton [nodes] [forcing ...]`` (default 3e3 nodes,
 forcings 1e-2 1e-4 1e-5 1e-6; under a minute): the Newton iterations of the bench step on the
-Krylov back-end with each largest forcing (``soilwater.efg.solver.FORCING``): the scaled
+Krylov back-end with each largest forcing (``soilwater.efg.system.FORCING``): the scaled
 residuals and the step's FGMRES iterations; then modified Newton on Krylov
 (``soilwater.linalg.krylov.Krylov.current = False``: the step's first tangent kept while it
 contracts the residual tenfold, as PARDISO's factorisation is) and full Newton on PARDISO
@@ -56,7 +56,7 @@ built, and after the step.
 
 ``python docs/krylov_study.py --smoother [nodes ...]`` (default 1e4 3e4; about 10
 minutes): one Krylov step of the bench case per method (EFG and the stable FEM pairs)
-with each finest-level AMG smoother (``soilwater.linalg.backends.Layout.smoother``): step and solve
+with each finest-level AMG smoother (``soilwater.linalg.layout.Layout.smoother``): step and solve
 time, Newton and FGMRES iterations. Then whole unconfined-compression runs of fem-th and
 fem-q2q1 (on the grid without centres) with each smoother: time, Newton and FGMRES
 iterations, cut-backs.
@@ -70,7 +70,7 @@ iterations and time.
 
 ``python docs/krylov_study.py --strength [theta ...]`` (default 0 0.01 0.02; about 15
 minutes): per strength-of-connection threshold of the AMG hierarchies
-(``soilwater.linalg.backends.Layout.strength``, set for every discretisation alike), one Krylov step
+(``soilwater.linalg.layout.Layout.strength``, set for every discretisation alike), one Krylov step
 of the bench case at 3e4 and 1e5 nodes (step and solve time, Newton and FGMRES
 iterations, peak memory) and whole unconfined-compression runs of fem-th and
 fem-p1p1-stab on Krylov (time, Newton and FGMRES iterations, cut-backs, or the failure).
@@ -192,7 +192,7 @@ SMOOTHED = ("efg", "fem-p1p1-stab", "fem-q2q1", "fem-th")
 
 
 def _laid_out(changes, fn, *args):
-    """``fn(*args)`` with the ``changes`` (:class:`soilwater.linalg.backends.Layout` fields) made to
+    """``fn(*args)`` with the ``changes`` (:class:`soilwater.linalg.layout.Layout` fields) made to
     the layout of every Krylov preconditioner."""
     import soilwater.linalg.krylov
 
@@ -303,15 +303,15 @@ def whole_runs():
 
 @contextmanager
 def _factorising(wrap):
-    """``soilwater.nonlinear.coupling.factorise`` replaced by ``wrap(original)`` inside the block."""
-    import soilwater.nonlinear.coupling
+    """``soilwater.nonlinear.newton.factorise`` replaced by ``wrap(original)`` inside the block."""
+    import soilwater.nonlinear.newton
 
-    original = soilwater.nonlinear.coupling.factorise
-    soilwater.nonlinear.coupling.factorise = wrap(original)
+    original = soilwater.nonlinear.newton.factorise
+    soilwater.nonlinear.newton.factorise = wrap(original)
     try:
         yield
     finally:
-        soilwater.nonlinear.coupling.factorise = original
+        soilwater.nonlinear.newton.factorise = original
 
 
 class _Captured(Exception):
@@ -359,11 +359,11 @@ def first_tangent(nodes, krylov=False, method="efg", solver="pardiso"):
 def orderings(sizes, methods=("efg", "fem-th", "fem-q2q1", "fem-p1p1-stab")):
     """SuperLU's factorisation of each method's first bench tangent (Cam-clay; EFG as
     ``make bench`` runs it on a direct solver) with scipy's default column ordering,
-    COLAMD, and with :data:`soilwater.linalg.backends.SUPERLU_ORDERING`: time and fill."""
+    COLAMD, and with :data:`soilwater.linalg.direct.SUPERLU_ORDERING`: time and fill."""
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
 
-    from soilwater.linalg.backends import SUPERLU_ORDERING
+    from soilwater.linalg.direct import SUPERLU_ORDERING
 
     for nodes, method in itertools.product(sizes, methods):
         K = sp.csc_matrix(first_tangent(nodes, method=method, solver="superlu")[0])
@@ -382,7 +382,7 @@ def symmetric(sizes):
     import scipy.sparse.linalg as spla
     from pyamg.krylov import fgmres
 
-    from soilwater.linalg.backends import _Pardiso
+    from soilwater.linalg.pardiso import _Pardiso
 
     for nodes, nitsche in itertools.product(sizes, (False, True)):
         K, layout = first_tangent(nodes, krylov=nitsche)
@@ -440,10 +440,11 @@ def newton_iterations(nodes, forcings):
     """The Newton residuals of one bench step per largest forcing, modified Newton on
     Krylov, and full Newton on PARDISO."""
     import soilwater.efg.solver
-    import soilwater.nonlinear.coupling
+    import soilwater.efg.system
+    import soilwater.nonlinear.newton
     import soilwater.linalg.krylov
 
-    original = soilwater.efg.solver.newton, soilwater.efg.solver.FORCING, soilwater.nonlinear.coupling.must_refactorise
+    original = soilwater.efg.solver.newton, soilwater.efg.system.FORCING, soilwater.nonlinear.newton.must_refactorise
 
     def traced(system, stats):
         before, tic = stats["linear_iterations"], time.perf_counter()
@@ -463,18 +464,18 @@ def newton_iterations(nodes, forcings):
     soilwater.efg.solver.newton = traced
     try:
         for forcing in forcings:
-            soilwater.efg.solver.FORCING = forcing
+            soilwater.efg.system.FORCING = forcing
             print(f"{nodes} nodes, krylov, largest forcing {forcing:g}:", flush=True)
             run("krylov")
-        soilwater.efg.solver.FORCING, soilwater.linalg.krylov.Krylov.current = original[1], False
+        soilwater.efg.system.FORCING, soilwater.linalg.krylov.Krylov.current = original[1], False
         print(f"{nodes} nodes, krylov, modified Newton:", flush=True)
         run("krylov")
         soilwater.linalg.krylov.Krylov.current = True
-        soilwater.nonlinear.coupling.must_refactorise = lambda *args: True
+        soilwater.nonlinear.newton.must_refactorise = lambda *args: True
         print(f"{nodes} nodes, pardiso, full Newton:", flush=True)
         run("pardiso")
     finally:
-        soilwater.efg.solver.newton, soilwater.efg.solver.FORCING, soilwater.nonlinear.coupling.must_refactorise = original
+        soilwater.efg.solver.newton, soilwater.efg.system.FORCING, soilwater.nonlinear.newton.must_refactorise = original
         soilwater.linalg.krylov.Krylov.current = True
 
 
@@ -569,8 +570,8 @@ def memory(nodes):
 @contextmanager
 def _precision(single):
     """PARDISO inside the block, factorising the tangent of every discretisation that
-    suits an iterative solver (:attr:`soilwater.linalg.backends.Layout.iterative`) in single precision
-    (whether its :attr:`soilwater.linalg.backends.Layout.single` asks for it or not), or every tangent
+    suits an iterative solver (:attr:`soilwater.linalg.layout.Layout.iterative`) in single precision
+    (whether its :attr:`soilwater.linalg.layout.Layout.single` asks for it or not), or every tangent
     in double."""
     import soilwater.linalg.backends
 
@@ -606,7 +607,7 @@ def single(sizes):
     perturbation) with each."""
     import scipy.sparse as sp
 
-    from soilwater.linalg.backends import _Pardiso
+    from soilwater.linalg.pardiso import _Pardiso
 
     for nodes in sizes:
         K, layout = first_tangent(nodes, krylov=True)

@@ -9,7 +9,7 @@ far a run has left that solution.
 
 ``python docs/post_peak_study.py --branches`` (about 18 minutes on 2 cores): the case
 with EFG three ways: PARDISO's modified Newton (the default), full Newton on PARDISO (the
-current tangent factorised at every iteration, ``soilwater.linalg.backends.CONTRACTION = 0``) and the
+current tangent factorised at every iteration, ``soilwater.linalg.layout.CONTRACTION = 0``) and the
 Krylov back-end; then with fem-th and fem-p1p1-stab on the same nodes (PARDISO's
 modified Newton). Prints time, Newton and FGMRES iterations, cut-backs and the largest
 q, and every 2 s the spread (largest minus smallest) of q and of p_w over the nodes
@@ -36,8 +36,10 @@ import scipy.sparse.linalg as spla
 
 import soilwater.efg.solver
 import soilwater.fem.solver
-import soilwater.linalg.backends
-from soilwater.nonlinear.coupling import TIMERS
+import soilwater.efg.discretisation
+import soilwater.efg.system
+import soilwater.linalg.layout
+from soilwater.nonlinear.history import TIMERS
 from soilwater.errors import ConvergenceError
 from soilwater.linalg.krylov import MAX_ITERATIONS, Krylov
 from soilwater.linalg.backends import linear_solver
@@ -55,23 +57,23 @@ def case():
     return load_case("unconfined-compression", GRID)
 
 
-#: The runs of ``--branches``: method, linear solver, label, ``soilwater.linalg.backends.CONTRACTION``.
-PATHS = (("efg", "pardiso", "modified Newton", soilwater.linalg.backends.CONTRACTION),
+#: The runs of ``--branches``: method, linear solver, label, ``soilwater.linalg.layout.CONTRACTION``.
+PATHS = (("efg", "pardiso", "modified Newton", soilwater.linalg.layout.CONTRACTION),
          ("efg", "pardiso", "full Newton", 0.0),
-         ("efg", "krylov", "Newton", soilwater.linalg.backends.CONTRACTION),
-         ("fem-th", "pardiso", "modified Newton", soilwater.linalg.backends.CONTRACTION),
-         ("fem-p1p1-stab", "pardiso", "modified Newton", soilwater.linalg.backends.CONTRACTION))
+         ("efg", "krylov", "Newton", soilwater.linalg.layout.CONTRACTION),
+         ("fem-th", "pardiso", "modified Newton", soilwater.linalg.layout.CONTRACTION),
+         ("fem-p1p1-stab", "pardiso", "modified Newton", soilwater.linalg.layout.CONTRACTION))
 
 
 def branches():
     """The case on the paths of :data:`PATHS`."""
-    kept = soilwater.linalg.backends.CONTRACTION
+    kept = soilwater.linalg.layout.CONTRACTION
     for method, solver, label, contraction in PATHS:
-        soilwater.linalg.backends.CONTRACTION = contraction
+        soilwater.linalg.layout.CONTRACTION = contraction
         try:
             _branch(method, solver, label)
         finally:
-            soilwater.linalg.backends.CONTRACTION = kept
+            soilwater.linalg.layout.CONTRACTION = kept
 
 
 def _branch(method, solver, label):
@@ -136,10 +138,10 @@ def tangent(times):
     rng = np.random.default_rng(0)
     for model, points, t0, t1 in _steps(times):
         timings = dict.fromkeys(TIMERS, 0.0)
-        disc = soilwater.efg.solver._discretise(model, points.nodes,
+        disc = soilwater.efg.discretisation.discretise(model, points.nodes,
                                       np.vstack([points.nodes, points.probes]), timings,
                                       points.cells)
-        system = soilwater.efg.solver._System(model, points, disc, t0, t1, timings)
+        system = soilwater.efg.system.System(model, points, disc, t0, t1, timings)
         first, scale = None, None
         for iterate in range(3):
             R, residual = system.residual()

@@ -27,7 +27,7 @@ import camclay_oracle as oracle
 from conftest import table1
 from soilwater.material import camclay
 from soilwater.material.camclay import CamClay
-from soilwater.nonlinear.coupling import material_update
+from soilwater.nonlinear.newton import material_update
 from soilwater.errors import ConvergenceError
 from soilwater.material.kinematics import DEVIATORIC, deviator, double_dot, hughes_winget, invariants
 
@@ -110,7 +110,7 @@ def test_a_start_in_tension_is_refused():
 
 
 def test_a_solver_names_the_kind_of_point_that_failed():
-    """:func:`soilwater.nonlinear.coupling.material_update` adds what a point is (a node, a background
+    """:func:`soilwater.nonlinear.newton.material_update` adds what a point is (a node, a background
     cell, a boundary point) to the material's message."""
     clay = table1()
     stress, state = clay.initial_state(3)

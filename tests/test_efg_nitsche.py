@@ -14,10 +14,13 @@ import pytest
 from soilwater.cli import main
 from soilwater.studies.essential.study import METHODS, _static_bound, confined, section
 from soilwater.studies.harness.metrics import path_error, terzaghi_errors
-from soilwater.efg import nitsche
+from soilwater.efg.essential import nitsche
 from soilwater.efg import statics
-from soilwater.efg.solver import Model, _discretise, _initial_points, _System, solve
-from soilwater.nonlinear.coupling import TIMERS, new_counts, newton
+from soilwater.efg.discretisation import discretise as _discretise
+from soilwater.efg.solver import Model, _initial_points, solve
+from soilwater.efg.system import System as _System
+from soilwater.nonlinear.history import TIMERS
+from soilwater.nonlinear.newton import new_counts, newton
 from soilwater.case.loader import load_case
 from soilwater.physics.weakform import Coefficients
 

@@ -11,9 +11,11 @@ import soilwater.fem.solver
 from soilwater.studies.bench.study import compression
 from soilwater.errors import InputError
 from soilwater.linalg.krylov import _amg, _Schwarz, _subdomains
-import soilwater.nonlinear.coupling
+import soilwater.efg.system
 import soilwater.linalg.backends
-from soilwater.linalg.backends import Layout, backend, factorise, linear_solver
+import soilwater.nonlinear.newton
+from soilwater.linalg.backends import backend, factorise, linear_solver
+from soilwater.linalg.layout import Layout
 from soilwater.case.loader import load_case
 
 pytest.importorskip("pyamg")
@@ -198,13 +200,13 @@ def test_efg_corrections_take_few_iterations():
 
 def test_the_forcing_cap_keeps_inexact_newton_on_exact_newtons_path(monkeypatch):
     """On the undrained bench step (stabilised Nitsche EFG, Cam-clay, 3 x 10^3 nodes)
-    the first correction, solved to EFG's forcing cap (``soilwater.efg.solver.FORCING``), lands
+    the first correction, solved to EFG's forcing cap (``soilwater.efg.system.FORCING``), lands
     where the exact one does (scaled residual within 1 %; measured 0.1 %), and inexact
     Newton through FGMRES then takes as many residuals as full Newton with exact solves
     (4; its last two are 50 and 20 times from the tolerance). Capped at 1e-4 instead,
     the first iterate is 30 % further off (and Newton needs one residual more)."""
     def residuals(solver, setting=()):
-        seen, residual = [], soilwater.nonlinear.coupling._residual
+        seen, residual = [], soilwater.nonlinear.newton._residual
 
         def traced(system, dx):
             R, scaled = residual(system, dx)
@@ -212,16 +214,16 @@ def test_the_forcing_cap_keeps_inexact_newton_on_exact_newtons_path(monkeypatch)
             return R, scaled
 
         with monkeypatch.context() as m, linear_solver(solver):
-            m.setattr(soilwater.nonlinear.coupling, "_residual", traced)
+            m.setattr(soilwater.nonlinear.newton, "_residual", traced)
             for module, name, value in setting:
                 m.setattr(module, name, value)
             soilwater.efg.solver.solve(compression(3000, "cam-clay", krylov=True), progress=False)
         return seen
 
-    exact = residuals("superlu", setting=[(soilwater.nonlinear.coupling, "must_refactorise",
+    exact = residuals("superlu", setting=[(soilwater.nonlinear.newton, "must_refactorise",
                                            lambda *args: True)])
     inexact = residuals("krylov")
-    loose = residuals("krylov", setting=[(soilwater.efg.solver, "FORCING", 1e-4)])
+    loose = residuals("krylov", setting=[(soilwater.efg.system, "FORCING", 1e-4)])
     assert len(inexact) == len(exact)
     assert inexact[1] == pytest.approx(exact[1], rel=0.01)
     assert loose[1] > 1.2 * exact[1]

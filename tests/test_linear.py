@@ -1,4 +1,4 @@
-"""The linear solver of both coupled solvers (soilwater.linalg.backends): back-ends and reuse."""
+"""The linear solver of both coupled solvers (soilwater.linalg): back-ends and reuse."""
 
 import importlib.util
 
@@ -8,11 +8,14 @@ import scipy.sparse as sp
 
 import soilwater.efg.solver
 import soilwater.fem.solver
-import soilwater.nonlinear.coupling
 import soilwater.linalg.backends
-from soilwater.nonlinear.coupling import TIMERS, new_counts, newton
+import soilwater.linalg.pardiso
+import soilwater.nonlinear.newton
+from soilwater.nonlinear.history import TIMERS
+from soilwater.nonlinear.newton import new_counts, newton
 from soilwater.errors import ConvergenceError, InputError
-from soilwater.linalg.backends import Layout, backend, factorise
+from soilwater.linalg.backends import backend, factorise
+from soilwater.linalg.layout import Layout
 from soilwater.case.loader import load_case
 
 PARDISO = importlib.util.find_spec("pypardiso") is not None
@@ -80,7 +83,7 @@ def test_superlu_factorises_K_when_asked_for_sym_K(monkeypatch):
 
 
 class Linear:
-    """Newton system ``R(x) = K x - b`` (:func:`soilwater.nonlinear.coupling.newton`)."""
+    """Newton system ``R(x) = K x - b`` (:func:`soilwater.nonlinear.newton.newton`)."""
 
     def __init__(self, K, groups, b):
         self.K, self.layout, self.b, self.x = K, Layout(groups=groups), b, np.zeros(len(b))
@@ -104,7 +107,7 @@ def test_newton_falls_back_to_K_when_sym_K_stalls(monkeypatch, name, skew):
     if name == "pardiso" and not PARDISO:
         pytest.skip("pypardiso is not installed (extra soilwater[fast])")
     monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", name)
-    monkeypatch.setattr(soilwater.nonlinear.coupling, "SYMMETRIC_FIRST", True)
+    monkeypatch.setattr(soilwater.nonlinear.newton, "SYMMETRIC_FIRST", True)
     system = Linear(*unsymmetric_saddle(skew))
     stats = {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
     newton(system, stats)
@@ -135,7 +138,7 @@ class Fenced:
 def test_newton_halves_a_correction_the_material_cannot_take(monkeypatch, backtracks,
                                                              converges):
     monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", "superlu")
-    monkeypatch.setattr(soilwater.nonlinear.coupling, "BACKTRACKS", backtracks)
+    monkeypatch.setattr(soilwater.nonlinear.newton, "BACKTRACKS", backtracks)
     system, stats = Fenced(), {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
     if not converges:
         with pytest.raises(ConvergenceError, match="return mapping"):
@@ -188,7 +191,7 @@ def test_pardiso_and_superlu_give_the_same_steps(monkeypatch, symmetric_first):
     runs = {}
     for name in ("superlu", "pardiso"):
         monkeypatch.setenv("SOILWATER_LINEAR_SOLVER", name)
-        monkeypatch.setattr(soilwater.nonlinear.coupling, "SYMMETRIC_FIRST", symmetric_first)
+        monkeypatch.setattr(soilwater.nonlinear.newton, "SYMMETRIC_FIRST", symmetric_first)
         result = soilwater.efg.solver.solve(compression(), progress=False)
         runs[name] = result.history
     symmetric = result.summary["symmetric_factorisations"]
@@ -226,7 +229,7 @@ def test_single_precision_factor_refines_to_the_residual_asked_for(monkeypatch,
         x = lu.solve(b, rtol=rtol)
         assert lu.single
         assert (np.linalg.norm((K @ x - b) / scales)
-                <= soilwater.linalg.backends.REFINED * np.linalg.norm(b / scales))
+                <= soilwater.linalg.pardiso.REFINED * np.linalg.norm(b / scales))
     assert lu.factorisations == 1
     assert not factorise(K, Layout(groups=groups, scales=scales)).single   # a penalty's
 

@@ -13,11 +13,13 @@ import pandas as pd
 import pytest
 
 from soilwater.fem.assembly import Shapes
-from soilwater.fem.solver import Model, Topology, _initial_state, _remesh
+from soilwater.fem.model import Model, Topology
+from soilwater.fem.remesh import remesh as _remesh
+from soilwater.fem.solver import _initial_state
 from soilwater.fem.solver import solve as fem_solve
 from soilwater.fem.spaces import Space, cell_bases
 from soilwater.fem.transfer import project, transfer
-from soilwater.nonlinear.coupling import TIMERS
+from soilwater.nonlinear.history import TIMERS
 from soilwater.errors import ConvergenceError, InputError
 from soilwater.material.kinematics import invariants
 from soilwater.case.loader import load_case

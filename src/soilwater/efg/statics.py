@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 import scipy.sparse.linalg as spla
 
-from soilwater.efg import nitsche
+from soilwater.efg.essential import nitsche
 from soilwater.efg import quadrature
 from soilwater.efg import vci
 from soilwater.efg.assembly import Pattern, elasticity_coefficients, scatter

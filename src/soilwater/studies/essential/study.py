@@ -31,13 +31,15 @@ import scipy.sparse.linalg as spla
 from soilwater.studies.harness import tables
 from soilwater.studies.harness.metrics import mandel_errors, path_error, terzaghi_errors
 from soilwater.studies.harness.runs import solved
-from soilwater.efg import nitsche
+from soilwater.efg.essential import nitsche
 from soilwater.efg import quadrature
 from soilwater.efg import solver
+from soilwater.efg.discretisation import discretise
+from soilwater.efg.system import System
 from soilwater.efg import statics
 from soilwater.efg.boundary import boundary_points, segment_edges
 from soilwater.efg.mls import ShapeFunctions
-from soilwater.nonlinear.coupling import TIMERS
+from soilwater.nonlinear.history import TIMERS
 from soilwater.case.loader import load_case
 
 METHODS = ("penalty", "nitsche")
@@ -351,9 +353,9 @@ def captured(name, overrides):
     model = solver.Model.build(case)
     points = solver._initial_points(model)
     timings = dict.fromkeys(TIMERS, 0.0)
-    disc = solver._discretise(model, points.nodes, np.vstack([points.nodes, points.probes]),
+    disc = discretise(model, points.nodes, np.vstack([points.nodes, points.probes]),
                               timings)
-    system = solver._System(model, points, disc, *case.times()[:2], timings)
+    system = System(model, points, disc, *case.times()[:2], timings)
     R, _ = system.residual()
     factor = system._factors[0] * model.scales.h / model.scales.modulus
     return sp.csr_matrix(system.tangent()), R, system.n, factor

@@ -1,0 +1,148 @@
+"""The run template of both coupled solvers: the march through the case's time levels.
+
+The EFG and FEM solvers differ only in how they discretise a step (shape functions or
+bases, cells, assembly, essential conditions); the run around the step is here:
+
+* :func:`run`: timers, the march, the summary every result carries;
+* :func:`march`: the case's time levels, a failing level halved up to :data:`MAX_CUTS`
+  times.
+
+The step itself is Newton's method (:mod:`soilwater.nonlinear.newton`); its history rows
+are :mod:`soilwater.nonlinear.history`'s.
+"""
+
+import time
+
+import numpy as np
+import pandas as pd
+from tqdm import tqdm
+
+from soilwater.errors import ConvergenceError
+from soilwater.linalg.backends import identity
+from soilwater.nonlinear.history import TIMERS
+from soilwater.nonlinear.newton import TOLERANCE, new_counts
+from soilwater.results import Result
+
+#: Halvings of a failing time step before the run stops.
+MAX_CUTS = 6
+
+
+def run(case, method, options, current, step, row, snapshot, summary, progress=True):
+    """The run template of both coupled solvers: march, time, summarise.
+
+    Parameters
+    ----------
+    case : Case
+    method : str
+        ``efg`` or an FEM pair; it names the result and the progress bar.
+    options : dict
+        The method's settings, stored with the result.
+    current : object
+        The solver's state at t = 0.
+    step : callable
+        ``step(current, t0, t1, stats) -> (current, iterations, residual)``, adding to
+        ``stats["timings"]`` (keys :data:`soilwater.nonlinear.history.TIMERS`) and the
+        counts of :func:`soilwater.nonlinear.newton.newton`.
+    row, snapshot : callable
+        As in :func:`march`.
+    summary : dict
+        The method's own summary entries (unknowns, penalties, ...).
+
+    Returns
+    -------
+    Result
+        Its summary holds ``steps``, ``tolerance``, ``linear_solver`` (the back-end of the
+        last factorisation, :func:`soilwater.linalg.backends.backend`'s without one),
+        ``summary``, the statistics of :func:`march`, the counts of
+        :func:`soilwater.nonlinear.newton.newton` (``factorisations``,
+        ``symmetric_factorisations``, ``single_factorisations``, ``perturbed_pivots``,
+        ``factor_flops``, ``linear_iterations``) and ``timings``.
+    """
+    stats = {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
+    tic = time.perf_counter()
+    history, snapshots = march(case, current, lambda c, t0, t1: step(c, t0, t1, stats),
+                               row, snapshot, stats, progress, desc=f"{method} {case.name}")
+    stats["timings"]["total_s"] = time.perf_counter() - tic
+    return Result(case, method, options, history, snapshots,
+                  {"steps": len(history), "tolerance": TOLERANCE,
+                   "linear_solver": identity(), **summary, **stats})
+
+
+def march(case, current, step, row, snapshot, stats, progress=True, desc=""):
+    """Advance through the case's time levels; cut a failing level back.
+
+    Parameters
+    ----------
+    case : Case
+    current : object
+        The solver's state at t = 0.
+    step : callable
+        ``step(current, t0, t1) -> (current, iterations, residual)``; raises
+        :class:`ConvergenceError` (or ``FloatingPointError``) when it fails.
+    row : callable
+        ``row(current, t, dt, info) -> dict``: the history row of a converged level.
+    snapshot : callable
+        ``snapshot(current, t) -> Snapshot``.
+    stats : dict
+        Updated in place: ``newton_iterations``, ``cutbacks``, ``max_residual``,
+        ``stopped`` (with ``time.on_failure = "stop"``: None, or where and why the run
+        ended before ``time.end``) and, when
+        the rows carry the uniqueness indicator (``diagnostics.uniqueness``),
+        ``uniqueness_onset_step``: the first step (from 1) whose indicator is not
+        positive, None if there is none.
+
+    Returns
+    -------
+    history : pandas.DataFrame
+        One row per level; an ``err`` column that is undefined throughout is left empty.
+    snapshots : list of Snapshot
+        At t = 0 and after every level.
+    """
+    stats.update({"newton_iterations": 0, "cutbacks": 0, "max_residual": 0.0,
+                  "stopped": None})
+    times = case.times()
+    rows, snapshots = [], [snapshot(current, 0.0)]
+    for t0, t1 in tqdm(list(zip(times[:-1], times[1:])), desc=desc, unit="step",
+                       disable=not progress or None, leave=False):
+        try:
+            current, info = _advance(current, step, t0, t1, stats)
+        except ConvergenceError as err:
+            if case.time.on_failure != "stop" or not rows:
+                raise
+            stats["stopped"] = f"at t = {t0:g} s: {err}"
+            break
+        rows.append(row(current, t1, t1 - t0, info))
+        snapshots.append(snapshot(current, t1))
+    history = pd.DataFrame(rows)
+    if "err" in history and history["err"].isna().all():
+        history["err"] = None
+    if "uniqueness" in history:
+        lost = np.flatnonzero(history["uniqueness"].to_numpy() <= 0)
+        stats["uniqueness_onset_step"] = int(lost[0]) + 1 if len(lost) else None
+    return history, snapshots
+
+
+def _advance(current, step, t0, t1, stats):
+    """One time level, halved while it fails (up to MAX_CUTS times)."""
+    dt = t1 - t0
+    for cut in range(MAX_CUTS + 1):
+        try:
+            t, trial, iterations, residuals = t0, current, 0, []
+            krylov = stats.get("linear_iterations", 0)
+            for _ in range(2**cut):
+                with np.errstate(all="ignore"):  # failures end in ConvergenceError
+                    trial, its, res = step(trial, t, t + dt / 2**cut)
+                t += dt / 2**cut
+                iterations += its
+                residuals.append(res)
+            stats["cutbacks"] += cut
+            stats["newton_iterations"] += iterations
+            stats["max_residual"] = max(stats["max_residual"], *residuals)
+            return trial, {"iterations": iterations, "residual": max(residuals),
+                           "substeps": 2**cut,
+                           "linear_iterations": stats.get("linear_iterations", 0) - krylov}
+        except (ConvergenceError, FloatingPointError) as err:
+            reason = err
+    raise ConvergenceError(f"step t = {t0:g} -> {t1:g} s failed after {MAX_CUTS} halvings "
+                           f"of the time step ({reason}): reduce time steps or loading "
+                           "rate, or check the boundary conditions")
