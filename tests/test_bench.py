@@ -12,7 +12,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from soilwater.studies.bench import study as bench
+from soilwater.linalg.backends import available
+from soilwater.studies.bench import analysis, plan, report, runs, study
+from soilwater.studies.harness import machine
 
 ROOT = Path(__file__).parents[1]
 
@@ -26,7 +28,7 @@ def _raises():
 
 
 def test_in_child_returns_the_value():
-    assert bench.in_child(divmod, 7, 2, timeout=30) == ((3, 1), "ok")
+    assert runs.in_child(divmod, 7, 2, timeout=30) == ((3, 1), "ok")
 
 
 @pytest.mark.parametrize("fn,args,status", [
@@ -36,13 +38,13 @@ def test_in_child_returns_the_value():
 ])
 def test_in_child_reports_a_child_that_gives_no_answer_at_once(fn, args, status):
     tic = time.perf_counter()
-    assert bench.in_child(fn, *args, timeout=60) == (None, status)
+    assert runs.in_child(fn, *args, timeout=60) == (None, status)
     assert time.perf_counter() - tic < 20       # not the whole timeout
 
 
 def test_in_child_stops_a_child_that_hangs():
     tic = time.perf_counter()
-    value, status = bench.in_child(time.sleep, 60, timeout=0.5)
+    value, status = runs.in_child(time.sleep, 60, timeout=0.5)
     assert status == "stopped at 0.5 s"
     assert 1 < value["peak_mb"] < 1e4                # this process's memory, in MB
     assert time.perf_counter() - tic < 20
@@ -60,13 +62,13 @@ def test_bad_sizes_are_one_line_and_write_nothing(tmp_path, sizes):
 
 
 def test_sizes_accept_exponents():
-    assert bench.parse_sizes("1000,3e5, 1e6") == [1000, 300_000, 1_000_000]
+    assert plan.parse_sizes("1000,3e5, 1e6") == [1000, 300_000, 1_000_000]
 
 
 def test_numpy_blas_names_the_openblas_variables_it_was_loaded_with():
     env = {**os.environ, "OPENBLAS_CORETYPE": "Prescott"}
     env.pop("OPENBLAS_L2_SIZE", None)
-    code = "from soilwater.studies.bench import study as bench; print(bench.numpy_blas())"
+    code = "from soilwater.studies.harness import machine; print(machine.numpy_blas())"
     line = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, check=True,
                           capture_output=True, text=True, timeout=120).stdout
     assert "OPENBLAS_CORETYPE Prescott, OPENBLAS_L2_SIZE unset" in line
@@ -75,93 +77,93 @@ def test_numpy_blas_names_the_openblas_variables_it_was_loaded_with():
 
 
 def test_dgemm_rates_are_positive_and_mkl_is_measured_where_pardiso_is():
-    rates = bench.dgemm(300, repeat=1)
+    rates = machine.dgemm(300, repeat=1)
     assert rates["n"] == 300 and rates["numpy_gflops"] > 0
-    assert (rates["mkl_gflops"] > 0) == bench.available("pardiso")
+    assert (rates["mkl_gflops"] > 0) == available("pardiso")
 
 
 def test_make_bench_unsets_the_openblas_variables_before_numpy_loads():
     recipe = (ROOT / "Makefile").read_text().split("\nbench:")[1].split("\n\n")[0]
     line = next(line for line in recipe.splitlines() if "soilwater bench" in line)
     assert all(f"-u {name}" in line.split("soilwater")[0]
-               for name in bench.OPENBLAS_VARIABLES)
+               for name in machine.OPENBLAS_VARIABLES)
 
 
 def test_plan_runs_only_efg_and_fem_p1p1_stab_on_cam_clay_from_large_from():
-    runs = bench.plan([1_000, bench.LARGE_FROM, 1_000_000])
+    runs = plan.plan([1_000, plan.LARGE_FROM, 1_000_000])
     small = [run for run in runs if run[0] == 1_000]
-    assert len(small) == len(bench.METHODS) * len(bench.MATERIALS)
-    assert {run[3] for run in small} == {bench.direct()} and {run[4] for run in small} == {
-        bench.TIME_LIMIT}
-    large = [run for run in runs if run[0] >= bench.LARGE_FROM]
+    assert len(small) == len(plan.METHODS) * len(plan.MATERIALS)
+    assert {run[3] for run in small} == {plan.direct()} and {run[4] for run in small} == {
+        plan.TIME_LIMIT}
+    large = [run for run in runs if run[0] >= plan.LARGE_FROM]
     assert [run[:3] for run in large] == [
-        (n, "cam-clay", m) for n in (bench.LARGE_FROM, 1_000_000)
+        (n, "cam-clay", m) for n in (plan.LARGE_FROM, 1_000_000)
         for m in ("efg", "fem-p1p1-stab")]
     assert {run[3] for run in large} == {"krylov"}
-    assert {run[4] for run in large} == {bench.LARGE_TIME_LIMIT}
+    assert {run[4] for run in large} == {plan.LARGE_TIME_LIMIT}
 
 
 def test_plan_runs_the_large_methods_on_both_solvers_from_both_from():
-    runs = bench.plan([bench.BOTH_FROM])
+    runs = plan.plan([plan.BOTH_FROM])
     krylov = [run[:3] for run in runs if run[3] == "krylov"]
-    assert krylov == [(bench.BOTH_FROM, material, m) for material in bench.MATERIALS
-                      for m in bench.LARGE_METHODS]
+    assert krylov == [(plan.BOTH_FROM, material, m) for material in plan.MATERIALS
+                      for m in plan.LARGE_METHODS]
     ready = [run[:3] for run in runs if run[3] != "krylov" and run[5]]
-    assert ready == ([(bench.BOTH_FROM, material, "efg") for material in bench.MATERIALS]
-                     if bench.direct() == "pardiso" else [])   # single precision there
-    assert len(runs) == len(bench.METHODS) * len(bench.MATERIALS) + len(krylov) + len(ready)
+    assert ready == ([(plan.BOTH_FROM, material, "efg") for material in plan.MATERIALS]
+                     if plan.direct() == "pardiso" else [])   # single precision there
+    assert len(runs) == len(plan.METHODS) * len(plan.MATERIALS) + len(krylov) + len(ready)
     assert all(run[5] for run in runs if run[3] == "krylov")
-    assert not any(run[3] == "krylov" or run[5] for run in bench.plan([bench.BOTH_FROM - 1]))
+    assert not any(run[3] == "krylov" or run[5] for run in plan.plan([plan.BOTH_FROM - 1]))
 
 
 def test_solver_and_limit_change_at_their_sizes(monkeypatch):
-    assert bench.solver_for(bench.KRYLOV_FROM - 1) in ("pardiso", "superlu")
-    assert bench.solver_for(bench.KRYLOV_FROM) == "krylov"
-    assert bench.time_limit(100_000) == bench.TIME_LIMIT
-    assert bench.time_limit(bench.LARGE_FROM) == bench.LARGE_TIME_LIMIT
-    monkeypatch.setattr(bench, "KRYLOV_FROM", 500)
-    assert bench.solver_for(500) == "krylov"
+    assert plan.solver_for(plan.KRYLOV_FROM - 1) in ("pardiso", "superlu")
+    assert plan.solver_for(plan.KRYLOV_FROM) == "krylov"
+    assert plan.time_limit(100_000) == plan.TIME_LIMIT
+    assert plan.time_limit(plan.LARGE_FROM) == plan.LARGE_TIME_LIMIT
+    monkeypatch.setattr(plan, "KRYLOV_FROM", 500)
+    assert plan.solver_for(500) == "krylov"
 
 
 def test_steps_records_the_solver_per_row_and_an_unavailable_back_end(monkeypatch):
     """Tiny sizes only: the iterative back-end is asked for from 300 nodes here."""
-    monkeypatch.setattr(bench, "KRYLOV_FROM", 300)
+    monkeypatch.setattr(plan, "KRYLOV_FROM", 300)
     lines = []
-    table = bench.steps([200, 300], methods=("efg",), materials=("elastic",),
+    table = runs.steps([200, 300], methods=("efg",), materials=("elastic",),
                         progress=lines.append)
-    assert list(table.columns) == list(bench.COLUMNS) and len(lines) == 2
+    assert list(table.columns) == list(runs.COLUMNS) and len(lines) == 2
     small, large = table.iloc[0], table.iloc[1]
-    assert small.status == "ok" and small.solver == bench.direct()
-    assert small.iterations >= 1 and small.step > 0 and small.limit_s == bench.TIME_LIMIT
+    assert small.status == "ok" and small.solver == plan.direct()
+    assert small.iterations >= 1 and small.step > 0 and small.limit_s == plan.TIME_LIMIT
     assert small.kb_per_node == pytest.approx(small.peak_mb * 1e3 / small.nodes)
     if small.factor_flops == small.factor_flops:             # the back-end counts them
         assert small.factor_gflops_lb == pytest.approx(small.factor_flops / small.solve / 1e9)
     assert large.solver == "krylov"
-    if not bench.usable("krylov"):
+    if not plan.usable("krylov"):
         assert large.status == "krylov not available" and large.step != large.step
         assert "krylov not available" in lines[1]
 
 
 def _rows(*rows):
-    """A table of :func:`bench.steps` from (method, nodes, step, status, solver, peak_mb)."""
+    """A table of :func:`runs.steps` from (method, nodes, step, status, solver, peak_mb)."""
     return pd.DataFrame([
         {"method": method, "material": "cam-clay", "nodes": nodes, "solver": solver,
          "efg": "-" if method != "efg" else {"krylov": "nitsche, perturbation"}.get(
              solver, "penalty, none"),
          "status": status, "step": step if status == "ok" else np.nan,
          "peak_mb": peak if status == "ok" else np.nan,
-         "limit_s": bench.time_limit(nodes)}
+         "limit_s": plan.time_limit(nodes)}
         for method, nodes, step, status, solver, peak in rows]).reindex(
-            columns=list(bench.COLUMNS))
+            columns=list(runs.COLUMNS))
 
 
-def test_issue17_targets_measured_where_every_run_completed():
+def test_scale_targets_measured_where_every_run_completed():
     sizes = (10_296, 100_010, 1_004_276)
     efg = [("efg", n, n * 1e-4, "ok", "krylov" if n > 3e5 else "pardiso", 2000.0)
            for n in sizes]
     stab = [("fem-p1p1-stab", n, n * 1e-4 / r, "ok", "krylov" if n > 3e5 else "pardiso", 1.0)
             for n, r in zip(sizes, (1.5, 3.0, 2.0))]
-    goals = bench.issue17_targets(_rows(*efg, *stab), "a CPU")
+    goals = analysis.scale_targets(_rows(*efg, *stab), "a CPU")
     met = dict(zip(goals.target, goals.met))
     assert met["EFG Cam-clay step at 1e5 nodes [s]"] == "yes"          # 10.0 s <= 16.05
     assert met["EFG Cam-clay peak memory at 1e5 nodes [GB]"] == "yes"  # 2.0 GB
@@ -175,14 +177,14 @@ def test_issue17_targets_measured_where_every_run_completed():
     assert "the CPU may differ" in goals["where"].iloc[0] and "a CPU" in goals["where"].iloc[0]
 
 
-def test_issue17_targets_never_say_yes_for_a_run_that_did_not_complete():
+def test_scale_targets_never_say_yes_for_a_run_that_did_not_complete():
     table = _rows(("efg", 10_296, 1.0, "ok", "pardiso", 500.0),
                   ("efg", 100_010, 0, "stopped at 240 s", "pardiso", 0),
                   ("efg", 1_004_276, 0, "died (signal 9)", "krylov", 0),
                   ("fem-p1p1-stab", 10_296, 0, "stopped at 240 s", "pardiso", 0),
                   ("fem-p1p1-stab", 100_010, 5.0, "ok", "pardiso", 0),
                   ("fem-p1p1-stab", 1_004_276, 0, "krylov not available", "krylov", 0))
-    goals = bench.issue17_targets(table)
+    goals = analysis.scale_targets(table)
     assert (goals.met == "not measured").all(), goals
     assert goals.measured.isna().all()
     where = dict(zip(goals.target + goals["where"].str.split(",").str[0], goals["where"]))
@@ -196,11 +198,11 @@ def test_issue17_targets_never_say_yes_for_a_run_that_did_not_complete():
         "fewer than two" in goals[goals.target.str.contains("growth")]["where"].iloc[0]
 
 
-def test_issue17_growth_needs_both_ends_and_a_missing_size_is_not_measured():
+def test_scale_growth_needs_both_ends_and_a_missing_size_is_not_measured():
     table = _rows(("efg", 10_296, 1.0, "ok", "pardiso", 500.0),
                   ("efg", 100_010, 10.0, "ok", "pardiso", 500.0),
                   ("efg", 300_675, 30.0, "ok", "krylov", 500.0))
-    goals = bench.issue17_targets(table).set_index("target")
+    goals = analysis.scale_targets(table).set_index("target")
     growth = goals.loc["EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes "
                        "(faster solver at each size)"]
     assert growth.met == "not measured" and "only (fit 1.0" in growth["where"]
@@ -208,7 +210,7 @@ def test_issue17_growth_needs_both_ends_and_a_missing_size_is_not_measured():
     assert goals.loc["EFG Cam-clay step at 1e6 nodes [s]"].met == "not measured"
 
 
-def test_issue17_targets_take_each_method_on_its_faster_solver():
+def test_scale_targets_take_each_method_on_its_faster_solver():
     """Both solvers at 1e4 and 1e5: the 1e5 step and memory per solver, the growth on the
     faster one at each size and per solver, the ratio of each method's faster step."""
     table = _rows(("efg", 10_296, 1.0, "ok", "pardiso", 500.0),
@@ -220,7 +222,7 @@ def test_issue17_targets_take_each_method_on_its_faster_solver():
                   ("fem-p1p1-stab", 10_296, 0.8, "ok", "krylov", 0),
                   ("fem-p1p1-stab", 100_010, 30.0, "stopped at 240 s", "pardiso", 0),
                   ("fem-p1p1-stab", 100_010, 8.0, "ok", "krylov", 0))
-    goals = bench.issue17_targets(table)
+    goals = analysis.scale_targets(table)
     step = goals[goals.target == "EFG Cam-clay step at 1e5 nodes [s]"]
     assert step.measured.tolist() == [40.0, 20.0]
     assert [w.split(",")[1].split(";")[0].strip() for w in step["where"]] == [
@@ -230,9 +232,9 @@ def test_issue17_targets_take_each_method_on_its_faster_solver():
     growth = goals[goals.target.str.contains("growth")].set_index("target").measured
     name = "EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes ({})"
     assert growth[name.format("faster solver at each size")] == pytest.approx(
-        bench.exponent([10_296, 100_010, 1_004_276], [1.0, 20.0, 200.0]))
+        analysis.exponent([10_296, 100_010, 1_004_276], [1.0, 20.0, 200.0]))
     assert growth[name.format("krylov; nitsche, perturbation")] == pytest.approx(
-        bench.exponent([10_296, 100_010, 1_004_276], [2.0, 20.0, 200.0]))
+        analysis.exponent([10_296, 100_010, 1_004_276], [2.0, 20.0, 200.0]))
     assert np.isnan(growth[name.format("pardiso; penalty, none")])
     ratios = goals[goals.target.str.contains("fem-p1p1-stab")]
     assert ratios.measured.tolist() == pytest.approx([2.0, 2.5])      # 1/0.5, 20/8
@@ -241,32 +243,33 @@ def test_issue17_targets_take_each_method_on_its_faster_solver():
 
 def test_exponent_fits_only_the_range_asked_for():
     nodes, seconds = [1_036, 10_296, 100_010, 1_004_276], [1.0, 10.0, 100.0, 1e5]
-    assert bench.exponent(nodes, seconds, within=(1e3, 1e5)) == pytest.approx(
+    assert analysis.exponent(nodes, seconds, within=(1e3, 1e5)) == pytest.approx(
         1.0, abs=0.01)
-    assert bench.exponent(nodes, seconds) > 1.5
-    assert bench.exponent(nodes, [1.0, np.nan, np.nan, 5.0], within=(1e4, 1e6)) != \
-        bench.exponent(nodes, [1.0, np.nan, np.nan, 5.0], within=(1e4, 1e6))  # NaN: 1 point
+    assert analysis.exponent(nodes, seconds) > 1.5
+    assert analysis.exponent(nodes, [1.0, np.nan, np.nan, 5.0], within=(1e4, 1e6)) != \
+        analysis.exponent(nodes, [1.0, np.nan, np.nan, 5.0], within=(1e4, 1e6))  # NaN: 1 point
 
 
-def test_issue7_targets_survive_runs_that_did_not_complete():
+def test_phase_targets_survive_runs_that_did_not_complete():
     table = _rows(("efg", 10_296, 1.0, "stopped at 240 s", "pardiso", 0),
                   ("fem-p1p1", 10_296, 2.0, "ok", "pardiso", 0))
-    goals = bench.targets(table, pd.DataFrame(), bench.exponents(table))
+    goals = analysis.phase_targets(table, pd.DataFrame(), analysis.exponents(table))
     assert goals.met.tolist() == ["not measured"]
 
 
 def test_run_writes_both_target_tables_the_rates_and_the_figure(tmp_path, monkeypatch):
-    monkeypatch.setattr(bench, "DGEMM_N", 200)
-    monkeypatch.setattr(bench, "SHAPES_UP_TO", 0)            # no shape functions
-    table = bench.run(str(tmp_path / "bench.md"), sizes=[200])
-    assert (table.status == "ok").all() and set(table.method) == set(bench.METHODS)
+    monkeypatch.setattr(study, "DGEMM_N", 200)
+    monkeypatch.setattr(study, "SHAPES_UP_TO", 0)            # no shape functions
+    table = study.run(str(tmp_path / "bench.md"), sizes=[200])
+    assert (table.status == "ok").all() and set(table.method) == set(plan.METHODS)
     text = (tmp_path / "bench.md").read_text()
-    for heading in ("## Targets (issue 17)", "## Targets (issue 7)",
+    for heading in ("## Targets at scale (EFG step, memory and growth to 10^6 nodes)",
+                    "## Targets per phase (EFG against FEM)",
                     "## Factorisation rate against dgemm", "## Counts, memory and rates"):
         assert heading in text
     assert "dgemm of two 200 x 200 float64 matrices" in text
     assert (tmp_path / "figures" / "bench.png").stat().st_size > 0
-    assert list(pd.read_csv(tmp_path / "tables" / "bench.csv").columns) == list(bench.COLUMNS)
+    assert list(pd.read_csv(tmp_path / "tables" / "bench.csv").columns) == list(runs.COLUMNS)
 
 
 def test_figure_draws_krylov_and_stopped_runs(tmp_path):
@@ -275,5 +278,5 @@ def test_figure_draws_krylov_and_stopped_runs(tmp_path):
                   ("fem-p1p1-stab", 10_296, 0.5, "ok", "pardiso", 0),
                   ("fem-p1p1-stab", 300_675, 0, "stopped at 900 s", "krylov", 0),
                   ("efg", 1_004_276, 0, "died (signal 9)", "krylov", 0))
-    bench.figure(table, tmp_path / "bench.png")
+    report.figure(table, tmp_path / "bench.png")
     assert (tmp_path / "bench.png").stat().st_size > 0

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import soilwater.efg.solver
-from soilwater.studies.bench.study import compression
+from soilwater.studies.bench.plan import compression
 from soilwater.errors import InputError
 from soilwater.linalg.backends import linear_solver
 from soilwater.linalg.threads import parts, run
