@@ -1,7 +1,7 @@
 """The measured numbers of the Krylov back-end against PARDISO, README "Speed".
 
 ``python docs/krylov_study.py [nodes ...]`` (default 1e4 3e4; about 12 minutes on 2
-cores): one step of ``make bench``'s case (:func:`soilwater.studies.bench.study.compression` with
+cores): one step of ``make bench``'s case (:func:`soilwater.studies.bench.plan.compression` with
 ``krylov=True``: EFG with Nitsche's conditions and the perturbation stabilisation, which
 the Krylov back-end needs) on both back-ends, each in its own forked process, stopped
 after 400 s. Prints the step time, Newton and FGMRES iterations, solve time and peak
@@ -63,7 +63,7 @@ iterations, cut-backs.
 
 ``python docs/krylov_study.py --overlap [nodes] [overlap ...]`` (default 3e4 nodes,
 overlaps 0.25 0.5 1.01; a few minutes): the Schwarz subdomains' growth
-(``soilwater.linalg.krylov.OVERLAP``; above 1 no unknown joins a neighbouring aggregate) against cost,
+(``soilwater.linalg.krylov_schwarz.OVERLAP``; above 1 no unknown joins a neighbouring aggregate) against cost,
 on the first tangent of the bench step as the Krylov sizes run it: the preconditioner's
 build time and kept inverses [MB], and FGMRES on a random right-hand side to 1e-8:
 iterations and time.
@@ -113,7 +113,8 @@ from functools import partial
 
 import numpy as np
 
-from soilwater.studies.bench.study import compression, in_child, one_step
+from soilwater.studies.bench.plan import compression
+from soilwater.studies.bench.runs import in_child, one_step
 from soilwater.errors import ConvergenceError
 from soilwater.linalg.backends import linear_solver
 from soilwater.case.loader import load_case
@@ -134,9 +135,9 @@ def stabilised(nodes, material="cam-clay", krylov=False):
 
 def steps(sizes):
     """One step per size and back-end."""
-    import soilwater.studies.bench.study
+    import soilwater.studies.bench.runs
 
-    soilwater.studies.bench.study.compression = stabilised
+    soilwater.studies.bench.runs.compression = stabilised
     for nodes in sizes:
         for solver in ("pardiso", "krylov"):
             row, status = in_child(one_step, "efg", nodes, "cam-clay", solver,
@@ -210,21 +211,21 @@ def _laid_out(changes, fn, *args):
 
 def overlaps(nodes, shares):
     """Build and solve time, inverses and iterations of the preconditioner per overlap."""
-    import soilwater.linalg.krylov
+    import soilwater.linalg.krylov_schwarz
     from soilwater.linalg.krylov import Krylov
 
     K, layout = first_tangent(nodes, krylov=True)
     b = np.random.default_rng(0).standard_normal(K.shape[0])
-    kept, build = [], soilwater.linalg.krylov._Schwarz.__init__
+    kept, build = [], soilwater.linalg.krylov_schwarz.Schwarz.__init__
 
     def measured(self, *args):
         build(self, *args)
         kept.append(self.inverses.nbytes)
 
-    soilwater.linalg.krylov._Schwarz.__init__, default = measured, soilwater.linalg.krylov.OVERLAP
+    soilwater.linalg.krylov_schwarz.Schwarz.__init__, default = measured, soilwater.linalg.krylov_schwarz.OVERLAP
     try:
         for share in shares:
-            soilwater.linalg.krylov.OVERLAP, kept[:] = share, []
+            soilwater.linalg.krylov_schwarz.OVERLAP, kept[:] = share, []
             tic = time.perf_counter()
             solver = Krylov(K, layout)
             built = time.perf_counter() - tic
@@ -233,7 +234,7 @@ def overlaps(nodes, shares):
                   f"{sum(kept) / 1e6:.0f} MB, FGMRES {solver.iterations} iterations, "
                   f"{time.perf_counter() - tic - built:.1f} s", flush=True)
     finally:
-        soilwater.linalg.krylov._Schwarz.__init__, soilwater.linalg.krylov.OVERLAP = build, default
+        soilwater.linalg.krylov_schwarz.Schwarz.__init__, soilwater.linalg.krylov_schwarz.OVERLAP = build, default
 
 
 def strengths(thetas):
@@ -593,9 +594,9 @@ def _precision(single):
 def _single_step(method, nodes, single):
     """One bench step (:func:`stabilised`) of ``method`` on PARDISO, in single precision
     or double."""
-    import soilwater.studies.bench.study
+    import soilwater.studies.bench.runs
 
-    soilwater.studies.bench.study.compression = stabilised
+    soilwater.studies.bench.runs.compression = stabilised
     with _precision(single):
         return one_step(method, nodes, "cam-clay", "pardiso")
 
@@ -697,7 +698,8 @@ def schur(sizes):
     import scipy.sparse.linalg as spla
     from pyamg.krylov import fgmres
 
-    from soilwater.linalg.krylov import RESTART, Krylov, _amg, _rigid_modes
+    from soilwater.linalg.krylov import RESTART, Krylov
+    from soilwater.linalg.krylov_amg import amg, rigid_modes
 
     for nodes in sizes:
         K, layout = first_tangent(nodes, krylov=True)
@@ -717,19 +719,19 @@ def schur(sizes):
         def exact(M):
             return spla.splu(sp.csc_matrix(M)).solve
 
-        modes = _rigid_modes(layout.locations[order[:nu]], layout.fields[order[:nu]])
+        modes = rigid_modes(layout.locations[order[:nu]], layout.fields[order[:nu]])
         displacements = {
-            "AMG, Gauss-Seidel": _amg(A, "gauss_seidel", layout.strength, modes, 2),
+            "AMG, Gauss-Seidel": amg(A, "gauss_seidel", layout.strength, modes, 2),
             "AMG, Schwarz": precondition.amg_u,
             "exact": exact(A)}
         pressures = {"fixed-stress lumped, exact": exact(D - s * lumped),
                      "SIMPLE, exact": exact(D - C @ sp.diags(1 / A.diagonal()) @ B),
                      "fixed-stress, AMG Gauss-Seidel": (
                          lambda r, t=-s,
-                         cycle=_amg(-s * consistent, "gauss_seidel", layout.strength):
+                         cycle=amg(-s * consistent, "gauss_seidel", layout.strength):
                          t * cycle(r)),
                      "fixed-stress, AMG Schwarz": (
-                         lambda r, t=-s, cycle=_amg(-s * consistent, "schwarz", layout.strength):
+                         lambda r, t=-s, cycle=amg(-s * consistent, "schwarz", layout.strength):
                          t * cycle(r)),
                      "fixed-stress, exact": exact(consistent)}
         if n_p <= 4000:

@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 
 import camclay_oracle as oracle
 from conftest import table1
-from soilwater.material import camclay
+from soilwater.material import camclay_kernel as camclay
 from soilwater.material.camclay import CamClay
 from soilwater.nonlinear.newton import material_update
 from soilwater.errors import ConvergenceError
@@ -165,7 +165,7 @@ def test_a_singular_local_jacobian_is_reported_in_one_line():
     status = np.array([camclay.CONVERGED, camclay.NOT_CONVERGED, camclay.SINGULAR], np.int8)
     with pytest.raises(ConvergenceError, match="^Cam-clay return mapping met a singular "
                        "local Jacobian: reduce the strain increment per step$"):
-        camclay._raise_on(status, 60)
+        camclay.raise_on(status, 60)
 
 
 @pytest.mark.parametrize("model", ["original", "modified"])

@@ -8,9 +8,10 @@ import scipy.sparse as sp
 
 import soilwater.efg.solver
 import soilwater.fem.solver
-from soilwater.studies.bench.study import compression
+from soilwater.studies.bench.plan import compression
 from soilwater.errors import InputError
-from soilwater.linalg.krylov import _amg, _Schwarz, _subdomains
+from soilwater.linalg.krylov_amg import amg
+from soilwater.linalg.krylov_schwarz import Schwarz, subdomains
 import soilwater.efg.system
 import soilwater.linalg.backends
 import soilwater.nonlinear.newton
@@ -120,7 +121,7 @@ def test_schwarz_subdomains_cover_every_unknown_and_keep_their_inverses():
     A = sp.csr_matrix(K[:800, :800])
     ml = pyamg.smoothed_aggregation_solver(sp.bsr_matrix(A, blocksize=(2, 2)),
                                            max_coarse=10, keep=True)
-    smoother = _Schwarz(A, *_subdomains(ml.levels[0].C, ml.levels[0].AggOp, 2))
+    smoother = Schwarz(A, *subdomains(ml.levels[0].C, ml.levels[0].AggOp, 2))
     sub, ptr = smoother.subdomain, smoother.pointer
     inv, inv_ptr = smoother.inverses, smoother.inverse_pointer
     assert set(sub) == set(range(800)) and len(sub) > 800
@@ -145,17 +146,17 @@ def test_schwarz_solves_side_by_side_only_subdomains_that_do_not_touch(monkeypat
     the pool of threads gives exactly the sweep of one thread."""
     import pyamg
 
-    import soilwater.linalg.krylov
+    import soilwater.linalg.krylov_schwarz
 
     K, layout = biot(n=20)
     A = sp.csr_matrix(K[:800, :800])
     ml = pyamg.smoothed_aggregation_solver(sp.bsr_matrix(A, blocksize=(2, 2)),
                                            max_coarse=10, keep=True)
-    monkeypatch.setattr(soilwater.linalg.krylov, "SPLIT_FROM", 0)          # split even this small one
-    monkeypatch.setattr(soilwater.linalg.krylov, "SIDE_BY_SIDE_FROM", 0)
-    smoother = _Schwarz(A, *_subdomains(ml.levels[0].C, ml.levels[0].AggOp, 2))
+    monkeypatch.setattr(soilwater.linalg.krylov_schwarz, "SPLIT_FROM", 0)          # split even this small one
+    monkeypatch.setattr(soilwater.linalg.krylov_schwarz, "SIDE_BY_SIDE_FROM", 0)
+    smoother = Schwarz(A, *subdomains(ml.levels[0].C, ml.levels[0].AggOp, 2))
     sub, ptr = smoother.subdomain, smoother.pointer
-    assert len(smoother.runs) > 1 and len(smoother.runs[0]) == soilwater.linalg.krylov.GROUPS
+    assert len(smoother.runs) > 1 and len(smoother.runs[0]) == soilwater.linalg.krylov_schwarz.GROUPS
     for ranges in smoother.runs:
         rows = [sub[ptr[lo]:ptr[hi]] for lo, hi in ranges]
         reads = [set(A[r].indices) | set(r) for r in rows]
@@ -165,7 +166,7 @@ def test_schwarz_solves_side_by_side_only_subdomains_that_do_not_touch(monkeypat
     together, alone = np.zeros(800), np.zeros(800)
     smoother.forward(A, together, b)
     smoother.backward(A, together, b)
-    monkeypatch.setattr(soilwater.linalg.krylov, "run", lambda kernel, ranges: [kernel(*r) for r in ranges])
+    monkeypatch.setattr(soilwater.linalg.krylov_schwarz, "run", lambda kernel, ranges: [kernel(*r) for r in ranges])
     smoother.forward(A, alone, b)
     smoother.backward(A, alone, b)
     assert np.array_equal(together, alone)
@@ -181,10 +182,10 @@ def test_schwarz_keeps_unknowns_without_strong_neighbours():
     for M in (sp.csr_matrix(sp.block_diag([sp.kronsum(one, one), diagonal])),
               sp.csr_matrix(diagonal)):
         ml = pyamg.smoothed_aggregation_solver(M, max_coarse=10, keep=True)
-        sub, _ = _subdomains(ml.levels[0].C, ml.levels[0].AggOp, 1)
+        sub, _ = subdomains(ml.levels[0].C, ml.levels[0].AggOp, 1)
         assert set(sub) == set(range(M.shape[0]))
     b = np.arange(50.0)
-    assert np.allclose(_amg(M, "schwarz", 0.0)(b), b / diagonal.diagonal(), rtol=1e-12)
+    assert np.allclose(amg(M, "schwarz", 0.0)(b), b / diagonal.diagonal(), rtol=1e-12)
 
 
 def test_efg_corrections_take_few_iterations():

@@ -206,7 +206,7 @@ def _parser():
                        "reports/bench.md)")
     p.add_argument("--out", default="reports/bench.md", help="Markdown table")
     p.add_argument("--sizes", help="comma-separated node counts, e.g. 1000,3e5 (default "
-                   "soilwater.studies.bench.study.SIZES)")
+                   "soilwater.studies.bench.plan.SIZES)")
     p.set_defaults(func=_bench)
 
     p = sub.add_parser("report", help="regenerate every figure and table under reports/")
@@ -312,7 +312,8 @@ def _check(args):
 
 
 def _bench(args):
-    from soilwater.studies.bench.study import SIZES, parse_sizes, run
+    from soilwater.studies.bench.plan import SIZES, parse_sizes
+    from soilwater.studies.bench.study import run
 
     run(args.out, sizes=SIZES if args.sizes is None else parse_sizes(args.sizes))
 
