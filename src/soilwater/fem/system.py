@@ -132,16 +132,15 @@ class System:
         """The state after convergence (the quadrature points are the material points)."""
         current, n_u, x = self.current, self.n_u, self.x
         du = x[:2 * n_u].reshape(2, n_u)[:, :len(current.vertices)].T
-        uniqueness = 0.0
+        indicator = 0.0
         if self.model.case.diagnostics.uniqueness:
-            uniqueness = uniqueness(self.model, self.con, self.disc,
-                                     self.domain_tangent())
+            indicator = uniqueness(self.model, self.con, self.disc, self.domain_tangent())
         reactions = np.array([self.R[dofs].sum() for dofs in self.con.segment_dofs])
         return replace(current, vertices=current.vertices + du, stress=self.stress,
                        state=self.state, p=x[2 * n_u:],
                        weights=self.disc.dx.ravel() * self.J,
                        stretching=self.deps / self.dt, velocity=x[:2 * n_u] / self.dt,
-                       uniqueness=uniqueness, reactions=reactions)
+                       uniqueness=indicator, reactions=reactions)
 
 
 def _layout(T, n_u, u_locations, mass, scales, pair):
