@@ -1,4 +1,4 @@
-"""Named edge segments and the rigid strip footing (issue 15, item 1), in both solvers.
+"""Named edge segments and the rigid strip footing, in both solvers.
 
 An elastic oedometer (a footing over the whole top of a laterally confined, drained
 layer) checks the sign and size of ``pressure@NAME`` by hand: ``M x settlement /
@@ -133,7 +133,7 @@ def test_small_undrained_footing_runs_to_a_fifth_of_its_width(method):
     cut-back, 10.54 kPa at 0.4 m; fem-th 11.7 s, 132 iterations, 2 cut-backs, 9.43 kPa
     (run time is not asserted: speed belongs to ``make bench``).
     (2 + pi) s_u = 6.69 kPa for this clay: the coarse grid is far from converged (the
-    study is issue 15's item 3)."""
+    footing study converges it)."""
     result = _solve(_small_footing(), method)
     h = result.history
     assert h["settlement@footing"].iloc[-1] == pytest.approx(0.4, rel=1e-12)

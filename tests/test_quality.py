@@ -1,4 +1,4 @@
-"""Cell quality in the histories (issue 15, item 4): soilwater.geometry.quality.cell_quality against
+"""Cell quality in the histories: soilwater.geometry.quality.cell_quality against
 hand values, the undeformed grid's cells in both solvers, the fem-th mesh distorting
 under the strip footing, and EFG's support-coverage check."""
 

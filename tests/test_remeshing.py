@@ -1,4 +1,4 @@
-"""Re-meshing of the FEM reference (``fem.remesh = "delaunay"``, issue 15 item 5).
+"""Re-meshing of the FEM reference (``fem.remesh = "delaunay"``).
 
 A mesh that needs no re-meshing is left alone; the transfer of the quadrature state is
 exact for linear fields inside the body, keeps integrals and ranges; an elastic body

@@ -182,7 +182,7 @@ history columns ``settlement@NAME`` (m, positive down: the footing's settlement,
 mean downward displacement of a segment that is no footing) and ``pressure@NAME``
 (kPa, compression positive: the vertical force the boundary exerts on the soil there, in
 excess of the initial state, over the current width; see
-:func:`soilwater.nonlinear.coupling.segment_columns`).
+:func:`soilwater.nonlinear.history.segment_columns`).
 
 At a corner both edges' conditions apply (a segment that reaches the corner counts
 there); two different non-free kinds on the same

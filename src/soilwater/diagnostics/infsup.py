@@ -46,7 +46,7 @@ def coefficients(weights, length, perturbation=0.0):
         Length scale of the H1 norm's value term [m] (:func:`soilwater.diagnostics.bifurcation.h1_gram`).
     perturbation : float
         A flow-equation perturbation ``beta`` times the stiffness that scales ``S`` [m2]
-        (``h^2 / 4`` for :attr:`soilwater.nonlinear.coupling.Scales.perturbation`); 0 without one.
+        (``h^2 / 4`` for :attr:`soilwater.physics.scales.Scales.perturbation`); 0 without one.
 
     Returns
     -------

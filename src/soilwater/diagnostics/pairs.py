@@ -21,7 +21,7 @@ Under ``dirichlet`` the constant pressure is a zero mode of every pair and is no
 Stabilised pairs add their pressure term to the Schur complement, in units of the P-wave
 modulus M: ``fem-p1p1-stab`` and EFG with ``efg.stabilisation = "perturbation"`` add
 ``(h^2/4) L``, L the pressure Laplacian (the solvers' ``beta = h^2 / (4 M)``,
-:attr:`soilwater.nonlinear.coupling.Scales.perturbation`); EFG with ``"projection"`` adds ``(M/G) F``, F
+:attr:`soilwater.physics.scales.Scales.perturbation`); EFG with ``"projection"`` adds ``(M/G) F``, F
 the cell-fluctuation form on the background cells (``tau = 1/G``,
 :func:`soilwater.physics.weakform.fluctuation`). Both are times ``efg.stabilisation_factor``.
 """

@@ -31,13 +31,13 @@ CELLS = ("delaunay", "squares")
 """Background integration cells of ``efg.cells``."""
 ESSENTIAL = ("penalty", "nitsche")
 """Essential conditions of ``efg.essential``: penalty (:mod:`soilwater.efg.boundary`) or Nitsche's
-method (:mod:`soilwater.efg.nitsche`)."""
+method (:mod:`soilwater.efg.essential.nitsche`)."""
 CORRECTIONS = ("vci", "none")
 """Test-gradient corrections of ``efg.correction``."""
 STABILISATIONS = ("none", "perturbation", "projection")
 """Pressure stabilisations of ``efg.stabilisation``: none, the flow-equation perturbation
-(:attr:`soilwater.nonlinear.coupling.Scales.perturbation`) or the polynomial pressure projection on the
-background cells (:attr:`soilwater.nonlinear.coupling.Scales.projection`)."""
+(:attr:`soilwater.physics.scales.Scales.perturbation`) or the polynomial pressure projection on the
+background cells (:attr:`soilwater.physics.scales.Scales.projection`)."""
 
 
 def weight_form(name, key=None):
@@ -151,7 +151,7 @@ class EFGSettings:
     ``cells`` is ``delaunay`` (rebuilt every step) or ``squares`` (quarter cells along
     the boundary); ``order`` is the Gauss order of the cells; ``essential`` is how
     essential conditions are imposed, ``penalty`` (:mod:`soilwater.efg.boundary`) or ``nitsche``
-    (:mod:`soilwater.efg.nitsche`: consistent, beta from an eigenvalue bound, no factor to
+    (:mod:`soilwater.efg.essential.nitsche`: consistent, beta from an eigenvalue bound, no factor to
     choose); ``penalty`` is the penalty factor relative to the stiffness scale (P-wave
     modulus over nodal spacing; unused with ``nitsche``);
     ``correction`` is ``vci`` (variationally consistent test-function gradients, which

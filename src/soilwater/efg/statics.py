@@ -2,7 +2,7 @@
 
 One solve of ``(K + K_essential) u = f_traction + f_essential`` on the case's nodes, with
 the case's ``[efg]`` settings (weight, scale factor, background cells, Gauss order,
-essential conditions by penalty or by Nitsche's method (:mod:`soilwater.efg.nitsche`, reference
+essential conditions by penalty or by Nitsche's method (:mod:`soilwater.efg.essential.nitsche`, reference
 operator the elastic stiffness itself), gradient correction: with ``vci`` the stiffness
 pairs corrected test gradients with MLS trial gradients and is not symmetric; SuperLU
 solves it).
@@ -102,7 +102,7 @@ def _nitsche(case, material, domain, shape_b, bp, constrained, u_bar):
     """Nitsche coefficients (:class:`soilwater.physics.weakform.Coefficients` of 2 x 2 fields at the G
     boundary points), right-hand side (2N,) and beta [kPa/m]: the reference operator is
     the stiffness itself, so the consistency and adjoint terms cancel in ``v K v``
-    (:mod:`soilwater.efg.nitsche`).
+    (:mod:`soilwater.efg.essential.nitsche`).
 
     The terms are linear in u: the right-hand side is minus the residual of u = 0, whose
     flux is zero and gap ``-u_bar``, i.e. the terms of the gap ``u_bar``."""

@@ -33,8 +33,8 @@ class Pair:
     continuity equation (see :mod:`soilwater.fem.solver`). ``smoother`` is the Krylov
     back-end's AMG smoother for the pair and ``iterative`` whether that back-end suits
     it (inf-sup stable or stabilised), so that it is the default on large systems
-    (:class:`soilwater.linalg.backends.Layout`). ``single``: PARDISO factorises its tangents in single
-    precision (:attr:`soilwater.linalg.backends.Layout.single`), where measured to pay
+    (:class:`soilwater.linalg.layout.Layout`). ``single``: PARDISO factorises its tangents in single
+    precision (:attr:`soilwater.linalg.layout.Layout.single`), where measured to pay
     (``python docs/krylov_study.py --single``): fem-th (one bench step's solve at 10^5
     nodes 31.3 s against 44.8 s); not fem-p1p1-stab (6.6 s against 6.4 s, and 65 of the
     199 factorisations of its unconfined compression were redone in double); fem-q2q1

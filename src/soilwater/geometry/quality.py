@@ -1,8 +1,8 @@
-"""Shape quality of mesh and background cells (issue 15, item 4): the smallest interior
+"""Shape quality of mesh and background cells: the smallest interior
 angle and a normalised shape measure of every cell, vectorised over cells.
 
 Both solvers report the worst cell of each level in their history (``min_angle``,
-``min_quality``, :func:`soilwater.nonlinear.coupling.history_row`): the FEM reference on its moved mesh,
+``min_quality``, :func:`soilwater.nonlinear.history.history_row`): the FEM reference on its moved mesh,
 EFG on the background cells it integrates on.
 """
 

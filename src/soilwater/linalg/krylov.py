@@ -66,7 +66,7 @@ class Krylov:
     Parameters
     ----------
     K : scipy.sparse matrix, shape (n, n)
-    layout : soilwater.linalg.backends.Layout
+    layout : soilwater.linalg.layout.Layout
 
     Attributes
     ----------

@@ -27,7 +27,7 @@ Three measurements, all on this machine in one command (never timed tests):
    ``fem-p1p1-stab`` also run on Krylov below 3 x 10^5, with either skeleton, so the
    scale targets take each on its faster solver, measured, and on PARDISO EFG runs a
    second time with Nitsche's conditions and the perturbation: PARDISO factorises such a
-   tangent (and fem-th's) in single precision (``soilwater.linalg.backends.Layout.single``;
+   tangent (and fem-th's) in single precision (``soilwater.linalg.layout.Layout.single``;
    the ``single_factorisations`` column). The solvers' own phase timers
    (:data:`soilwater.nonlinear.history.TIMERS`) give shape functions (FEM: basis
    construction), background cells (FEM: moving the mesh), assembly of the tangent, linear

@@ -7,7 +7,7 @@ sees.
 * :func:`confined`: how near singular the undrained simple shear's tangent is with
   either method, with and without the pressure stabilisation;
 * :func:`eigenvalue_strips`: Nitsche's eigenvalue bound on strips of 0 to 3 neighbour
-  rings against the whole domain's (:func:`soilwater.efg.nitsche.largest_eigenvalue`);
+  rings against the whole domain's (:func:`soilwater.efg.essential.nitsche.largest_eigenvalue`);
 * :func:`conditioning`: the first Newton tangent of a case at a few thousand nodes, its
   displacement block's diagonal span and condition estimate, and restarted GMRES with
   Jacobi or incomplete LU preconditioners: the relative residual it reaches against the
@@ -157,7 +157,7 @@ def eigenvalue_strips(levels=((13, 4), (25, 7), (49, 13), (97, 25)), rings=(0, 1
 
 
 def _static_bound(case):
-    """``(domain, boundary)`` arguments of :func:`soilwater.efg.nitsche.largest_eigenvalue` for a
+    """``(domain, boundary)`` arguments of :func:`soilwater.efg.essential.nitsche.largest_eigenvalue` for a
     static case's elastic operator and constrained components."""
     s, material = case.efg, case.material()
     nodes, loop = case.nodes(), case.boundary_loop()
