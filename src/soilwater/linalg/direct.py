@@ -49,18 +49,3 @@ class _SuperLU(_Factor):
 
     def solve(self, b, rtol=None):
         return self.lu.solve(b)
-
-
-class _SuperLU(_Factor):
-    """SuperLU's LU factorisation of ``K`` (it has no symmetric mode)."""
-
-    backend, symmetric, perturbed_pivots, flops = "superlu", False, 0, 0.0
-
-    def __init__(self, K):
-        try:
-            self.lu = spla.splu(sp.csc_matrix(K), permc_spec=SUPERLU_ORDERING)
-        except RuntimeError as err:
-            raise ConvergenceError(f"the tangent is singular ({err})") from None
-
-    def solve(self, b, rtol=None):
-        return self.lu.solve(b)
