@@ -72,7 +72,8 @@ def test_a_full_report_runs_every_study_and_records_its_code(fake):
     assert (fake / "tables" / "alpha.csv").exists() and (fake / "tables" / "beta.md").exists()
     assert fake / "REPORT.md" in written
     meta = store.load(fake, "alpha").meta
-    assert meta["code"] == store.inputs_hash(registry.STUDIES["alpha"], registry.STUDIES)
+    assert meta["solvers"] == []
+    assert meta["code"] == store.inputs_hash(registry.STUDIES["alpha"], registry.STUDIES, [])
     assert f"made from code `{meta['code'][:7]}`" in text
     assert "Stale" not in text
 
@@ -98,6 +99,32 @@ def test_a_changed_source_marks_the_section_stale(fake):
     beta = text[text.index("## Study beta"):]
     assert "**Stale**" in beta and "--only beta" in beta
     assert "**Stale**" not in text[:text.index("## Study beta")]
+
+
+def test_a_change_to_a_solver_marks_stale_only_the_sections_that_used_it(fake, tmp_path,
+                                                                         monkeypatch):
+    package = tmp_path / "package"
+    for path in ("efg/weights.py", "fem/spaces.py", "case/model.py",
+                 "studies/harness/tables.py"):
+        (package / path).parent.mkdir(parents=True, exist_ok=True)
+        (package / path).write_text("x = 1\n")
+    monkeypatch.setattr(store, "PACKAGE", package)
+    alpha = Path(registry.STUDIES["alpha"].load().__file__)
+    alpha.write_text(alpha.read_text() + "\nimport soilwater.efg.weights\n")
+    report.make_report(fake)
+    assert store.load(fake, "alpha").meta["solvers"] == ["efg"]
+    (package / "fem/spaces.py").write_text("x = 2\n")
+    report.make_report(fake, only="beta")
+    assert "**Stale**" not in (fake / "REPORT.md").read_text()
+    (package / "efg/weights.py").write_text("x = 2\n")
+    report.make_report(fake, only="beta")
+    text = (fake / "REPORT.md").read_text()
+    assert "**Stale**" in text[:text.index("## Study beta")]
+    assert "**Stale**" not in text[text.index("## Study beta"):]
+    (package / "case/model.py").write_text("x = 2\n")
+    report.make_report(fake, only="alpha")
+    text = (fake / "REPORT.md").read_text()
+    assert "**Stale**" in text[text.index("## Study beta"):]
 
 
 def test_a_study_not_run_yet_says_so(fake):

@@ -2,8 +2,8 @@
 
 One solve of ``(K + K_essential) u = f_traction + f_essential`` on the case's nodes, with
 the case's ``[efg]`` settings (weight, scale factor, background cells, Gauss order,
-essential conditions by penalty or by Nitsche's method (:mod:`soilwater.efg.essential.nitsche`, reference
-operator the elastic stiffness itself), gradient correction: with ``vci`` the stiffness
+essential conditions by penalty or by Nitsche's method
+(:mod:`soilwater.efg.essential.nitsche`, reference operator the elastic stiffness itself), gradient correction: with ``vci`` the stiffness
 pairs corrected test gradients with MLS trial gradients and is not symmetric; SuperLU
 solves it).
 Prescribed displacements are those of the case at ``time.end``: ``fixed`` is zero,
@@ -90,8 +90,8 @@ def solve(case):
 
 
 def _penalty(case, material, domain, shape_b, bp, constrained, u_bar):
-    """Penalty coefficients (:class:`soilwater.physics.weakform.Coefficients` of 2 x 2 fields at the G
-    boundary points), right-hand side (2N,) and factor."""
+    """Penalty coefficients (:class:`soilwater.physics.weakform.Coefficients` of 2 x 2
+    fields at the G boundary points), right-hand side (2N,) and factor."""
     alpha = penalty_factor(material, case, case.efg.penalty)
     return (penalty_coefficients(bp, constrained, alpha),
             load_vector(shape_b.phi, bp, alpha * u_bar, constrained),
@@ -99,8 +99,8 @@ def _penalty(case, material, domain, shape_b, bp, constrained, u_bar):
 
 
 def _nitsche(case, material, domain, shape_b, bp, constrained, u_bar):
-    """Nitsche coefficients (:class:`soilwater.physics.weakform.Coefficients` of 2 x 2 fields at the G
-    boundary points), right-hand side (2N,) and beta [kPa/m]: the reference operator is
+    """Nitsche coefficients (:class:`soilwater.physics.weakform.Coefficients` of 2 x 2
+    fields at the G boundary points), right-hand side (2N,) and beta [kPa/m]: the reference operator is
     the stiffness itself, so the consistency and adjoint terms cancel in ``v K v``
     (:mod:`soilwater.efg.essential.nitsche`).
 

@@ -30,7 +30,7 @@ from soilwater.physics.geostatic import buoyant_weight
 #: Strength-of-connection threshold of the Krylov back-end's AMG on EFG tangents
 #: (:attr:`soilwater.linalg.layout.Policy.strength`). An MLS support couples each node to
 #: many others, weakly at its rim; counting only couplings of at least 1 % makes smaller
-#: aggregates and Schwarz subdomains and fewer FGMRES iterations (README, "Speed").
+#: aggregates and Schwarz subdomains and fewer FGMRES iterations (docs, studies, "Krylov").
 STRENGTH = 0.01
 #: Largest forcing of the Krylov back-end's inexact Newton on EFG
 #: (:attr:`soilwater.linalg.layout.Policy.forcing`). The first correction solved to 1e-5

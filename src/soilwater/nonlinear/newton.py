@@ -20,7 +20,7 @@ TOLERANCE = 1e-8
 MAX_ITERATIONS = 25
 #: Whether the first factorisation of a step is the symmetric one of ``sym(K)``
 #: (:func:`soilwater.linalg.backends.factorise`; every refactorisation is of ``K``).
-#: Off: the tangents are not symmetric enough for it to pay (README, "Speed").
+#: Off: the tangents are not symmetric enough for it to pay (docs, studies, "Direct solvers").
 SYMMETRIC_FIRST = False
 #: Halvings of a Newton correction whose iterate the material cannot take.
 BACKTRACKS = 4

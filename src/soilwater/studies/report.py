@@ -67,10 +67,9 @@ def make_report(root="reports", only=None):
             raise SoilwaterError(f"study {name} reads the output of {', '.join(missing)}: "
                                  f"run soilwater report --only {','.join(missing)},{name}")
         saved[name] = store.run(study, root, {n: saved[n].data for n in study.needs},
-                                store.inputs_hash(study, studies), settings,
-                                runner.COUNTS)
-    text = markdown(saved, {name: store.inputs_hash(s, studies)
-                            for name, s in studies.items()})
+                                studies, settings)
+    text = markdown(saved, {name: store.inputs_hash(s, studies, store.solvers(saved[name]))
+                            for name, s in studies.items() if saved[name] is not None})
     (root / "REPORT.md").write_text(text)
     return [p for name in names for p in store.paths(root, name)] + [root / "REPORT.md"]
 
@@ -89,13 +88,15 @@ def provenance(name, saved, today):
         return (f"**Stale**: section `{name}` was made from code `{meta['code'][:7]}` on "
                 f"{meta['made']}; the sources it depends on have changed since "
                 f"(`{today[:7]}`): rerun `soilwater report --only {name}`.")
-    return (f"*Section `{name}`: made from code `{meta['code'][:7]}` on {meta['made']} "
-            f"in {meta['seconds']:.0f} s.*")
+    solvers = ", ".join(f"`{s}/`" for s in meta.get("solvers", ())) or "no solver"
+    return (f"*Section `{name}`: made from code `{meta['code'][:7]}` (shared library, "
+            f"{solvers}, its study) on {meta['made']} in {meta['seconds']:.0f} s.*")
 
 
 def markdown(saved, hashes):
     """REPORT.md from the saved outputs (name -> :class:`~soilwater.studies.harness.
-    study.Saved` or None) and today's source hashes (name -> hash)."""
+    study.Saved` or None) and today's source hashes of the saved ones (name -> hash over
+    the solvers each used)."""
     lines = _header(saved)
     for name, study in registry.STUDIES.items():
         if saved[name] is None:

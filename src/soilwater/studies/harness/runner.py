@@ -38,6 +38,9 @@ from soilwater.studies.harness.paths import CACHE, PACKAGE
 DASK = {"address": None}
 #: Jobs run and jobs read from the cache in this process (the report states them).
 COUNTS = {"runs": 0, "cached": 0}
+#: Solver folders (``efg``, ``fem``) of the jobs run or read since last cleared: a
+#: study's section depends on those and not on the others.
+USED = set()
 
 
 @dataclass(frozen=True)
@@ -158,6 +161,7 @@ def run(jobs, workers=None, dask=None, cache_dir=CACHE, progress=True, desc="swe
     bar.close()
     COUNTS["runs"] += len(outcomes)
     COUNTS["cached"] += sum(o.cached for o in outcomes)
+    USED.update(folder for job in jobs for folder in SOURCES[job.method])
     return outcomes
 
 

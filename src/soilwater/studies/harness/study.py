@@ -26,10 +26,13 @@ from dataclasses import dataclass
 from importlib import import_module
 from pathlib import Path
 
+from soilwater.studies.harness import runner
 from soilwater.studies.harness.paths import PACKAGE
 
-#: Package folders that are not the library a study's numbers depend on.
-_APART = ("studies",)
+#: Package folders that are not the shared library: the solvers, each a study's input
+#: only if it runs or imports them, and the studies.
+_SOLVERS = ("efg", "fem")
+_APART = (*_SOLVERS, "studies")
 
 
 @dataclass(frozen=True)
@@ -64,17 +67,20 @@ class Saved:
     meta: dict
 
 
-def source_hash(folders):
-    """Hash of the library sources (every ``.py`` and ``.toml`` of the package outside
-    ``studies/``), the study harness and ``folders``: 16 hex digits.
+def source_hash(folders, solvers=_SOLVERS):
+    """Hash of the shared library sources (every ``.py`` and ``.toml`` of the package
+    outside ``efg/``, ``fem/`` and ``studies/``), the ``solvers`` folders, the study
+    harness and ``folders``: 16 hex digits.
 
-    A change to the solvers, the material, the built-in cases, the harness or a study's
-    own folder changes it; a change to another study's folder does not.
+    A change to the material, the built-in cases, the harness, one of ``solvers`` or a
+    study's own folder changes it; a change to another solver or to another study's folder
+    does not.
     """
     digest = hashlib.sha256()
     library = [(PACKAGE, p) for p in sorted(PACKAGE.rglob("*"))
                if p.suffix in (".py", ".toml")
-               and p.relative_to(PACKAGE).parts[0] not in _APART]
+               and (p.relative_to(PACKAGE).parts[0] not in _APART
+                    or p.relative_to(PACKAGE).parts[0] in solvers)]
     own = [(Path(folder), p) for folder in (PACKAGE / "studies" / "harness", *folders)
            for p in sorted(Path(folder).rglob("*.py"))]
     for top, path in library + own:
@@ -83,11 +89,25 @@ def source_hash(folders):
     return digest.hexdigest()[:16]
 
 
-def inputs_hash(study, registry):
-    """The source hash of ``study``: the library, its own folder and the folders of the
-    studies it needs (``registry``: name -> :class:`Study`)."""
+def inputs_hash(study, registry, solvers=_SOLVERS):
+    """The source hash of ``study``: the shared library, the ``solvers`` folders it used,
+    its own folder and the folders of the studies it needs (``registry``: name ->
+    :class:`Study`)."""
     folders = [study.folder] + [registry[n].folder for n in study.needs]
-    return source_hash(folders)
+    return source_hash(folders, solvers)
+
+
+def imported_solvers(study, registry):
+    """The solver folders (``efg``, ``fem``) that ``study``'s own sources, or those of the
+    studies it needs, import directly (not through the runner)."""
+    folders = [study.folder] + [registry[n].folder for n in study.needs]
+    text = "".join(p.read_text() for folder in folders for p in Path(folder).rglob("*.py"))
+    return {name for name in _SOLVERS if f"soilwater.{name}" in text}
+
+
+def solvers(saved):
+    """The solver folders a saved output depends on (both when it does not say)."""
+    return tuple(saved.meta.get("solvers", _SOLVERS))
 
 
 def paths(root, name):
@@ -121,16 +141,20 @@ def load(root, name):
         return None
 
 
-def run(study, root, inputs, code, settings, counts):
+def run(study, root, inputs, registry, settings):
     """Run ``study`` into ``root``, save its data and return the :class:`Saved`.
 
-    ``counts`` is the runner's running tally (``runs``, ``cached``); the study's share
-    is what it adds.
+    Its meta records the solver folders it used (those of the runner's jobs and those its
+    sources import) and the source hash over them (:func:`inputs_hash`); its runs and
+    cached runs are its share of the runner's tally.
     """
-    before = dict(counts)
+    counts, before = runner.COUNTS, dict(runner.COUNTS)
+    runner.USED.clear()
     tic = time.perf_counter()
     data = study.load().run(Path(root), inputs)
-    meta = {"code": code, "settings": settings,
+    used = sorted(runner.USED | imported_solvers(study, registry))
+    meta = {"code": inputs_hash(study, registry, used), "solvers": used,
+            "settings": settings,
             "seconds": round(time.perf_counter() - tic, 1),
             "runs": counts["runs"] - before["runs"],
             "cached": counts["cached"] - before["cached"],
