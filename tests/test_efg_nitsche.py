@@ -12,7 +12,9 @@ import pandas as pd
 import pytest
 
 from soilwater.cli import main
-from soilwater.studies.essential.study import METHODS, _static_bound, confined, section
+from soilwater.studies.essential.strips import _static_bound
+from soilwater.studies.essential.study import section
+from soilwater.studies.essential.tangent import METHODS, confined
 from soilwater.studies.harness.metrics import path_error, terzaghi_errors
 from soilwater.efg.essential import nitsche
 from soilwater.efg import statics
@@ -83,8 +85,9 @@ def test_simple_shear_with_nitsche_follows_the_driver():
     flux on the constrained boundary, not an extra load (counted twice, the shear
     strain ended at 0.29996 and the path error at 0.0115; measured now 0.0069, as the
     penalty's). With the pressure stabilisation: without it the undrained confined
-    tangent is near singular with either method (``soilwater.studies.essential.study.confined``)
-    and Nitsche's path depends on the linear solver."""
+    tangent is near singular with either method
+    (``soilwater.studies.essential.tangent.confined``) and Nitsche's path depends on the
+    linear solver."""
     result = solve(load_case("simple-shear", ["time.steps=50", NITSCHE,
                                               "efg.stabilisation=perturbation"]),
                    progress=False)
