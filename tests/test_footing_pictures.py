@@ -1,8 +1,9 @@
-"""The strip-footing pictures (:mod:`soilwater.studies.footing.pictures`) from a tiny real run:
-the report's tasks write PNGs that open and one GIF per method with one frame per
-snapshot (or every k-th), the section names what they wrote, the distortion count rates
-the undeformed mesh clean and a mesh with a node pushed through its neighbours inverted,
-and a failing writer leaves nothing behind."""
+"""The strip-footing pictures (:mod:`soilwater.studies.footing.pictures`,
+:mod:`soilwater.studies.footing.gif`) from a tiny real run: the report's tasks write PNGs
+that open and one GIF per method with one frame per snapshot (or every k-th), the section
+names what they wrote, the distortion count rates the undeformed mesh clean and a mesh
+with a node pushed through its neighbours inverted, and a failing writer leaves nothing
+behind."""
 
 import copy
 
@@ -10,7 +11,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from soilwater.studies.footing import pictures, pictures_report
+from soilwater.studies.footing import gif, pictures, pictures_report
 from soilwater.efg.solver import solve as efg_solve
 from soilwater.fem.solver import solve as fem_solve
 from soilwater.case.loader import load_case
@@ -54,7 +55,7 @@ def test_tasks_write_pngs_gifs_and_a_section_naming_them(tiny, tmp_path):
 
 
 def test_every_kth_snapshot_with_the_last(tiny, tmp_path):
-    path = pictures.animation(tiny[1], tmp_path / "fem.gif", most=5)
+    path = gif.animation(tiny[1], tmp_path / "fem.gif", most=5)
     with Image.open(path) as image:
         assert image.n_frames == 5  # snapshots 0, 3, 6, 9 and 10
     assert [p.name for p in tmp_path.iterdir()] == ["fem.gif"]
@@ -90,10 +91,10 @@ def test_a_failing_writer_leaves_nothing(tiny, tmp_path, monkeypatch):
         if len(calls) > 2:
             raise OSError("disk full")
         return original_grab(self, **kwargs)
-    original_grab = pictures.PillowWriter.grab_frame
-    monkeypatch.setattr(pictures.PillowWriter, "grab_frame", grab_then_fail)
+    original_grab = gif.PillowWriter.grab_frame
+    monkeypatch.setattr(gif.PillowWriter, "grab_frame", grab_then_fail)
     with pytest.raises(OSError, match="disk full"):
-        pictures.animation(tiny[0], tmp_path / "efg.gif")
+        gif.animation(tiny[0], tmp_path / "efg.gif")
     assert list(tmp_path.iterdir()) == []
 
     earlier = tmp_path / "deformed.png"

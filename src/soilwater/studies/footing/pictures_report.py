@@ -1,12 +1,15 @@
 """The strip footing's pictures in the report: deformed configurations, pore pressure
-and animations (:mod:`soilwater.studies.footing.pictures`)."""
+(:mod:`soilwater.studies.footing.pictures`) and animations
+(:mod:`soilwater.studies.footing.gif`)."""
 
 from pathlib import Path
 
 from soilwater.geometry.quality import DISTORTED
-from soilwater.studies.footing.pictures import (EDGE_RADIUS, LEVEL_PERCENTILES, ZOOM,
-                                                animations, deformed_figure, frames,
-                                                measures, pore_pressure_figure, runs)
+from soilwater.studies.footing.gif import animations, frames
+from soilwater.studies.footing.pictures import (EDGE_RADIUS, LEVEL_PERCENTILES,
+                                                deformed_figure, measures,
+                                                pore_pressure_figure, runs)
+from soilwater.studies.footing.view import ZOOM
 from soilwater.studies.harness import tables
 
 NAME = "footing-pictures"
