@@ -8,12 +8,12 @@ what CI regresses against).
 
 A table with a ``regime`` column (the unconfined compression) is checked for round-off
 (the sidecar's ``branch`` rules). Rows the *reference* marks ``after`` lie past the loss of
-uniqueness of the homogeneous solution (:mod:`soilwater.diagnostics.bifurcation`), where round-off of the
-CPU, the BLAS or the linear solver may choose another branch: there ERR and the indicator
-only meet one-sided bounds (``after_onset``). The averaged p', q are still compared until
-the run departs from the homogeneous solution in the reference or in the new table (its
-ERR above ``departure``), and from then on only meet their bounds (``after_departure``):
-a 1e-12 node jitter moves fem-th's q by 5e-3 once it has departed.
+uniqueness of the homogeneous solution (:mod:`soilwater.diagnostics.bifurcation`), where
+round-off of the CPU, the BLAS or the linear solver may choose another branch: there ERR
+and the indicator only meet one-sided bounds (``after_onset``). The averaged p', q are
+still compared until the run departs from the homogeneous solution in the reference or in
+the new table (its ERR above ``departure``), and from then on only meet their bounds
+(``after_departure``): a 1e-12 node jitter moves fem-th's q by 5e-3 once it has departed.
 """
 
 import json

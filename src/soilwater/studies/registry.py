@@ -1,4 +1,5 @@
-"""The studies of the report, in report order: name -> :class:`~soilwater.studies.harness.study.Study`.
+"""The studies of the report, in report order: name ->
+:class:`~soilwater.studies.harness.study.Study`.
 
 ``soilwater report`` runs them all; ``soilwater report --only NAME[,NAME]`` reruns the
 named ones and rebuilds REPORT.md from every study's last saved output.

@@ -21,8 +21,9 @@ def fem_terzaghi(methods=FEM_METHODS, moose=None):
     -------
     pandas.DataFrame
         ``method, steps`` (``moose`` or ``dt<=0.01``), the errors of
-        :func:`soilwater.studies.harness.metrics.terzaghi_errors` and, on MOOSE's steps with ``moose``
-        given, those of :func:`soilwater.studies.harness.metrics.moose_errors`.
+        :func:`soilwater.studies.harness.metrics.terzaghi_errors` and, on MOOSE's steps
+        with ``moose`` given, those of
+        :func:`soilwater.studies.harness.metrics.moose_errors`.
     """
     steps = {"moose": (), "dt<=0.01": ("time.dt_max=0.01", "time.end=2.0")}
     settings = list(itertools.product(steps, methods))

@@ -15,16 +15,16 @@ ESSENTIAL = ("penalty", "nitsche")
 
 
 def footing_reach(methods=ESSENTIAL, densities=(4, 8)):
-    """The strip-footing study's runs (:mod:`soilwater.studies.footing.study`, to 0.5 B in 100 steps)
-    with either method and with fem-th, on ``densities`` spacings per B at the footing:
+    """The strip-footing study's runs (:mod:`soilwater.studies.footing.study`, to 0.5 B in
+    100 steps) with either method and with fem-th, on ``densities`` spacings per B at the footing:
     how far each gets and how far its curve lies from fem-th's on the finest.
 
     Returns
     -------
     pandas.DataFrame
-        :func:`soilwater.studies.footing.study.summary`'s ``label, nodes, reached``, the pressure at
-        :data:`soilwater.studies.footing.study.AT` B, ``error`` (against fem-th on ``densities[-1]``)
-        and ``run_time``.
+        :func:`soilwater.studies.footing.study.summary`'s ``label, nodes, reached``, the
+        pressure at :data:`soilwater.studies.footing.study.AT` B, ``error`` (against fem-th
+        on ``densities[-1]``) and ``run_time``.
     """
     steps = load_case(footing.CASE).time.steps
     variants = [(f"efg, {m}", "efg", (f"efg.essential={m}",)) for m in methods]

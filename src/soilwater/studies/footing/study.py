@@ -6,8 +6,9 @@ The built-in ``strip-footing`` case (footing width B = 1 m, symmetry half, weigh
 normally consolidated Cam-clay, k = 0, 10 B x 10 B) is run by each method of
 :data:`METHODS` on the three node densities of :data:`DENSITIES` (the built-in layout
 refined, :func:`soilwater.studies.harness.grids.refined`) to a settlement of 0.5 B, and EFG
-also with more time steps on the coarsest nodes (:data:`EFG_STEPS`). ``s_u`` is the clay's plane-strain
-undrained strength (:func:`soilwater.references.closed_forms.undrained_strength`). The reference curve is
+also with more time steps on the coarsest nodes (:data:`EFG_STEPS`). ``s_u`` is the clay's
+plane-strain undrained strength
+(:func:`soilwater.references.closed_forms.undrained_strength`). The reference curve is
 that of :data:`REFERENCE`, the finest Taylor-Hood run; a run's error is its largest
 relative distance from it. The node set distorts as a mesh would: each triangle of the
 initial nodes (FEM: its elements; EFG: the Delaunay triangles of its initial nodes, which
@@ -281,7 +282,8 @@ def section(summary):
         "METHOD`; `efg+nitsche` is EFG with `--set efg.essential=nitsche`, Nitsche's "
         "essential conditions in place of the paper's penalty; `fem-th+remesh` is fem-th "
         "with `--set fem.remesh=delaunay`), and on "
-        f"the built-in nodes to {DEEP:g} B at the same step. Nodes: equal spacings of B/n within B of the footing, growing to 4 "
+        f"the built-in nodes to {DEEP:g} B at the same step. Nodes: equal spacings of B/n "
+        "within B of the footing, growing to 4 "
         "times that at the far edges; n = " + ", ".join(map(str, DENSITIES))
         + " (the built-in case has 8). Pressures are the mean contact pressure over "
         "Prandtl's (2 + pi) s_u, s_u = M p'_f / sqrt(3) with p'_f = p'0 exp(-Lambda), "

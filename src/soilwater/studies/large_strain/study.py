@@ -1,14 +1,15 @@
 """Finite-strain consolidation under self-weight: the built-in ``large-strain-column`` (a
 geostatic soft clay layer loaded tenfold) and ``self-weight-consolidation`` (a freshly
 deposited layer), each method against Gibson's finite-strain reference
-(:mod:`soilwater.references.gibson`, which shares no code with the solvers), and the loaded column against
-small-strain Terzaghi with the initial coefficients at mid-depth.
+(:mod:`soilwater.references.gibson`, which shares no code with the solvers), and the loaded
+column against small-strain Terzaghi with the initial coefficients at mid-depth.
 
 The reference column is the case's: the compression line is the case's normally
-consolidated one-dimensional line (:func:`soilwater.physics.geostatic.normal_void_ratio`, slopes
-lambda and kappa in ``e``-``ln sigma'_v``, which the modified Cam-clay follows exactly
-along its K0 path), the same permeability law, unit weights, height, surcharge, load and
-drainage. Time is measured in ``T = d^2 / c_v0`` (:func:`soilwater.references.gibson.consolidation_time`).
+consolidated one-dimensional line (:func:`soilwater.physics.geostatic.normal_void_ratio`,
+slopes lambda and kappa in ``e``-``ln sigma'_v``, which the modified Cam-clay follows
+exactly along its K0 path), the same permeability law, unit weights, height, surcharge,
+load and drainage. Time is measured in ``T = d^2 / c_v0``
+(:func:`soilwater.references.gibson.consolidation_time`).
 """
 
 import matplotlib.pyplot as plt
@@ -28,7 +29,8 @@ CASES = ("large-strain-column", "self-weight-consolidation")
 WINDOWS = (0.01, 0.1, 1.0)
 #: Times of the profiles, in T.
 PROFILE_TIMES = (0.05, 0.3, 1.0)
-#: Gibson's resolution: cells and steps per decade (converged to about 1e-4, soilwater.references.gibson).
+#: Gibson's resolution: cells and steps per decade (converged to about 1e-4,
+#: soilwater.references.gibson).
 RESOLUTION = (800, 40)
 #: The anchor stress of the reference's compression line [kPa] (any: the line is one).
 SIGMA_REF = 10.0
@@ -328,7 +330,8 @@ def section(summary, small, profile_errors):
         "",
         f"Against the targets on `{CASES[0]}` (settlement within 2 % from 0.1 T "
         "on, final within 1 %, pore pressure profiles within 2 % of the load): "
-        + "; ".join(f"{m} {loaded.loc[m, w] * 100:.2f} % / {abs(loaded.loc[m, 'final_error']) * 100:.2f} % / "
+        + "; ".join(f"{m} {loaded.loc[m, w] * 100:.2f} % / "
+                    f"{abs(loaded.loc[m, 'final_error']) * 100:.2f} % / "
                     f"{errs.loc[(CASES[0], m), 'p_w_error'] * 100:.2f} %"
                     for m in METHODS)
         + f". On `{CASES[1]}`: "

@@ -200,8 +200,8 @@ STABILITY_METHODS = {"fem-th": ("fem-th", ()), "fem-p1p1": ("fem-p1p1", ()),
 def column_stability(permeabilities=(0.0, 1e-5), grids=((3, 21), (5, 41), (9, 81)),
                      methods=STABILITY_METHODS):
     """First-step pore-pressure stability of the soil column, boundary layer and interior
-    apart (:func:`soilwater.studies.harness.metrics.column_pollution`), under refinement at the built-in
-    column's ratio: the first step scales with h^2 (40 s at 3 x 21 nodes), so
+    apart (:func:`soilwater.studies.harness.metrics.column_pollution`), under refinement at
+    the built-in column's ratio: the first step scales with h^2 (40 s at 3 x 21 nodes), so
     ``h^2 / (c_v dt)`` stays 30 at k = 1e-5.
 
     Returns

@@ -1,10 +1,11 @@
 """The undrained bifurcation of the unconfined compression, measured (report section).
 
-Past the loss of uniqueness of the homogeneous undrained solution (:mod:`soilwater.diagnostics.bifurcation`)
-round-off chooses the branch, so a single run's ERR says nothing about a method. Here:
+Past the loss of uniqueness of the homogeneous undrained solution
+(:mod:`soilwater.diagnostics.bifurcation`) round-off chooses the branch, so a single run's
+ERR says nothing about a method. Here:
 
-* :func:`soilwater.studies.harness.onset.continuum_onset`: the Rudnicki-Rice criterion along the stress-point driver's
-  path, the material's own onset;
+* :func:`soilwater.studies.harness.onset.continuum_onset`: the Rudnicki-Rice criterion
+  along the stress-point driver's path, the material's own onset;
 * :func:`ensemble`: every run of :data:`soilwater.studies.harness.runs.PATH_RUNS` with its node
   set jittered (:data:`JITTERS`, a fraction of the spacing) and with each linear solver,
   the unperturbed members recording the discrete indicator per step;
