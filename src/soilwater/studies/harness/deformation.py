@@ -163,8 +163,8 @@ def snapshot_strain(initial, snapshot, triangles):
 
 def smallest_angles(snapshots, triangles):
     """Smallest interior angle [degrees] of each triangle at each snapshot, (S, T):
-    :func:`soilwater.geometry.quality.cell_quality` of the triangles on the snapshots' node positions
-    (negative where a triangle has inverted)."""
+    :func:`soilwater.geometry.quality.cell_quality` of the triangles on the snapshots' node
+    positions (negative where a triangle has inverted)."""
     corners = np.stack([np.asarray(snap.points)[triangles] for snap in snapshots])
     return cell_quality(corners.reshape(-1, 3, 2))[0].reshape(len(corners), -1)
 

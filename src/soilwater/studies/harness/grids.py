@@ -34,8 +34,11 @@ def refined(core, domain=10.0):
 
     Examples
     --------
-    >>> refined(8)[2:]
-    ('discretisation.x=[[1.0, 8], [10.0, 33, 3.75]]', 'discretisation.y=[[9.0, 33, 0.26666666666666666], [10.0, 8]]')
+    >>> x, y = refined(8)[2:]
+    >>> x
+    'discretisation.x=[[1.0, 8], [10.0, 33, 3.75]]'
+    >>> y
+    'discretisation.y=[[9.0, 33, 0.26666666666666666], [10.0, 8]]'
     >>> [refined(core)[2].split(", ")[3] for core in (4, 12)]
     ['16', '50']
     """

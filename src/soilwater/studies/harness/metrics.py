@@ -82,8 +82,8 @@ def column_pollution(result, step, layer=LAYER):
     """Boundary-layer overshoot and interior pollution of a column's pore pressure.
 
     The reference is Terzaghi's series with the initial constrained modulus at the step's
-    time (:func:`soilwater.references.closed_forms.terzaghi`), or the undrained pressure when k = 0. Every
-    node counts, not only the axis.
+    time (:func:`soilwater.references.closed_forms.terzaghi`), or the undrained pressure
+    when k = 0. Every node counts, not only the axis.
 
     Parameters
     ----------
@@ -129,8 +129,9 @@ def terzaghi_errors(result):
     """Pore-pressure and settlement errors of a Terzaghi run against the series solution.
 
     Pressures at the probes ``p0..p9`` (heights 0..9) are compared with
-    :func:`soilwater.references.closed_forms.terzaghi`; errors are normalised by the undrained pressure p0
-    (``max |p - p_exact| / p0``, per time window) and by the load (``..._load``).
+    :func:`soilwater.references.closed_forms.terzaghi`; errors are normalised by the
+    undrained pressure p0 (``max |p - p_exact| / p0``, per time window) and by the load
+    (``..._load``).
 
     Returns
     -------
@@ -278,7 +279,8 @@ def band(points, gamma, area=None):
     points : array_like, shape (N, 2)
         Node positions [m] (the configuration the angle is measured in).
     gamma : array_like, shape (N,)
-        Shear strain at the nodes, >= 0 (:func:`soilwater.studies.harness.deformation.nodal_strain`).
+        Shear strain at the nodes, >= 0
+        (:func:`soilwater.studies.harness.deformation.nodal_strain`).
     area : array_like, shape (N,), optional
         Area each node stands for [m2] (default: equal).
 

@@ -46,7 +46,8 @@ USED = set()
 @dataclass(frozen=True)
 class Job:
     """One run: a case, a method, overrides ``("section.key=value", ...)`` and the linear
-    solver (``"pardiso"``, ``"superlu"`` or None for :func:`soilwater.linalg.backends.backend`'s choice)."""
+    solver (``"pardiso"``, ``"superlu"`` or None for
+    :func:`soilwater.linalg.backends.backend`'s choice)."""
 
     case: str
     method: str
