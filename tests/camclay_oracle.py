@@ -1,22 +1,23 @@
-"""The numpy return mapping of Cam-clay that :meth:`soilwater.material.camclay.CamClay.update` replaced:
-the test oracle of its numba kernel.
+"""The numpy return mapping of Cam-clay that
+:meth:`soilwater.material.camclay.CamClay.update` replaced: the test oracle of its numba
+kernel.
 
 It is the package's former vectorised ``CamClay.update``, kept verbatim as a function of
-a :class:`~soilwater.material.camclay.CamClay` (``update(clay, ...)``): a Newton iteration over all points
-at once in (ln p', q, ln p'c, dgamma), the vertex re-solve of the original model, the
-consistent tangent. It keeps its own copies of the yield function, the hardening law and
-the mean specific volume, so that it checks the package's numba scalar functions too; from
-the clay it takes only parameters and ``moduli``.
+a :class:`~soilwater.material.camclay.CamClay` (``update(clay, ...)``): a Newton iteration
+over all points at once in (ln p', q, ln p'c, dgamma), the vertex re-solve of the original
+model, the consistent tangent. It keeps its own copies of the yield function, the
+hardening law and the mean specific volume, so that it checks the package's numba scalar
+functions too; from the clay it takes only parameters and ``moduli``.
 
-Conventions as in :mod:`soilwater.material.camclay`: stress tension positive ``(xx, yy, zz, xy)``, strain
-Voigt ``(xx, yy, zz, 2xy)``, p', q, p'c compression positive.
+Conventions as in :mod:`soilwater.material.camclay`: stress tension positive
+``(xx, yy, zz, xy)``, strain Voigt ``(xx, yy, zz, 2xy)``, p', q, p'c compression positive.
 """
 
 import numpy as np
 
 from soilwater.errors import ConvergenceError
-from soilwater.material.kinematics import (DEVIATORIC, IDENTITY, deviator, double_dot, hughes_winget,
-                             invariants)
+from soilwater.material.kinematics import (DEVIATORIC, IDENTITY, deviator, double_dot,
+                                           hughes_winget, invariants)
 
 
 def update(clay, stress, state, dstrain, dspin, tol=1e-11, max_iter=60):

@@ -48,8 +48,8 @@ import camclay_oracle as oracle  # noqa: E402
 from soilwater.material import camclay_kernel as camclay  # noqa: E402
 from soilwater.material.camclay import CamClay  # noqa: E402
 from soilwater.linalg.threads import threads, using  # noqa: E402
-from soilwater.material.kinematics import (DEVIATORIC, deviator, double_dot, hughes_winget,  # noqa: E402
-                             invariants)
+from soilwater.material.kinematics import (  # noqa: E402
+    DEVIATORIC, deviator, double_dot, hughes_winget, invariants)
 
 
 def table1(model):

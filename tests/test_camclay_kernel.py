@@ -29,7 +29,8 @@ from soilwater.material import camclay_kernel as camclay
 from soilwater.material.camclay import CamClay
 from soilwater.nonlinear.newton import material_update
 from soilwater.errors import ConvergenceError
-from soilwater.material.kinematics import DEVIATORIC, deviator, double_dot, hughes_winget, invariants
+from soilwater.material.kinematics import (DEVIATORIC, deviator, double_dot, hughes_winget,
+                                           invariants)
 
 STRESS_TOL = 2e-10    # of p' at the start of the step
 TANGENT_TOL = 2e-8    # of the tangent's Frobenius norm

@@ -76,7 +76,8 @@ def test_show_applies_overrides(capsys):
 ])
 def test_bad_case_input_is_one_line(tmp_path, args, word):
     (tmp_path / "case.toml").write_text(
-        (Path(__file__).parents[1] / "src" / "soilwater" / "case" / "builtin" / "terzaghi.toml").read_text()
+        (Path(__file__).parents[1] / "src" / "soilwater" / "case" / "builtin"
+         / "terzaghi.toml").read_text()
         .replace("end = 10.0", "end = 10.0\nviscosity = 1e-3"))
     proc = subprocess.run([sys.executable, "-m", "soilwater.cli"] + args, cwd=tmp_path,
                           capture_output=True, text=True)

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from soilwater.cli import main
-from soilwater.studies.harness.metrics import (axis_profile, mandel_errors, oscillation_index, path_error,
-                                 terzaghi_errors)
+from soilwater.studies.harness.metrics import (axis_profile, mandel_errors, oscillation_index,
+                                               path_error, terzaghi_errors)
 from soilwater.efg.solver import solve
 from soilwater.case.loader import load_case
 from soilwater.results import MARKER

@@ -1,6 +1,6 @@
-"""Gibson's finite-strain 1-D consolidation reference (soilwater.references.gibson): equilibrium, the
-small-strain limit (Terzaghi), the large-strain closed form (Xie and Leo 2004), the static
-end states, its tangent and its convergence."""
+"""Gibson's finite-strain 1-D consolidation reference (soilwater.references.gibson):
+equilibrium, the small-strain limit (Terzaghi), the large-strain closed form (Xie and Leo
+2004), the static end states, its tangent and its convergence."""
 
 import dataclasses
 

@@ -152,11 +152,13 @@ def test_schwarz_solves_side_by_side_only_subdomains_that_do_not_touch(monkeypat
     A = sp.csr_matrix(K[:800, :800])
     ml = pyamg.smoothed_aggregation_solver(sp.bsr_matrix(A, blocksize=(2, 2)),
                                            max_coarse=10, keep=True)
-    monkeypatch.setattr(soilwater.linalg.krylov_schwarz, "SPLIT_FROM", 0)          # split even this small one
+    # split even this small one
+    monkeypatch.setattr(soilwater.linalg.krylov_schwarz, "SPLIT_FROM", 0)
     monkeypatch.setattr(soilwater.linalg.krylov_schwarz, "SIDE_BY_SIDE_FROM", 0)
     smoother = Schwarz(A, *subdomains(ml.levels[0].C, ml.levels[0].AggOp, 2))
     sub, ptr = smoother.subdomain, smoother.pointer
-    assert len(smoother.runs) > 1 and len(smoother.runs[0]) == soilwater.linalg.krylov_schwarz.GROUPS
+    assert (len(smoother.runs) > 1
+            and len(smoother.runs[0]) == soilwater.linalg.krylov_schwarz.GROUPS)
     for ranges in smoother.runs:
         rows = [sub[ptr[lo]:ptr[hi]] for lo, hi in ranges]
         reads = [set(A[r].indices) | set(r) for r in rows]
@@ -166,7 +168,8 @@ def test_schwarz_solves_side_by_side_only_subdomains_that_do_not_touch(monkeypat
     together, alone = np.zeros(800), np.zeros(800)
     smoother.forward(A, together, b)
     smoother.backward(A, together, b)
-    monkeypatch.setattr(soilwater.linalg.krylov_schwarz, "run", lambda kernel, ranges: [kernel(*r) for r in ranges])
+    monkeypatch.setattr(soilwater.linalg.krylov_schwarz, "run",
+                        lambda kernel, ranges: [kernel(*r) for r in ranges])
     smoother.forward(A, alone, b)
     smoother.backward(A, alone, b)
     assert np.array_equal(together, alone)
@@ -194,7 +197,8 @@ def test_efg_corrections_take_few_iterations():
     default Gauss-Seidel smoother and the lumped pressure mass a correction took about
     200 (837 FGMRES iterations in 5 residuals at 10^4 nodes)."""
     with linear_solver("krylov"):
-        result = soilwater.efg.solver.solve(compression(1000, "cam-clay", krylov=True), progress=False)
+        result = soilwater.efg.solver.solve(compression(1000, "cam-clay", krylov=True),
+                                            progress=False)
     s = result.summary
     assert 0 < s["linear_iterations"] <= 20 * s["newton_iterations"]
 

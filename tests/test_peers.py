@@ -1,12 +1,16 @@
-"""Single-point peer data through the driver, with the README's tolerances for a variant."""
+"""Single-point peer data through the driver, with the tolerances for a variant that the
+peer data's own README states (``../shared/peer-data/README.md``, outside this repository;
+docs/studies/measured.rst lists them)."""
 
 import numpy as np
 
-from soilwater.studies.peers.study import geos_oedometer, mfront_triaxial, relative_difference, summary
+from soilwater.studies.peers.study import (geos_oedometer, mfront_triaxial,
+                                           relative_difference, summary)
 
 
 def test_geos_oedometer_load_unload_reload(peer):
-    """Stresses within 3 % (README, hypoelastic variant); p'c frozen while unloading."""
+    """Stresses within 3 % (peer-data README, hypoelastic variant); p'c frozen while
+    unloading."""
     frame = geos_oedometer(peer)
     np.testing.assert_allclose(frame.eps_a, frame.eps_a_ref, atol=1e-12)
     assert relative_difference(frame, "axial").max() < 0.03
@@ -19,7 +23,8 @@ def test_geos_oedometer_load_unload_reload(peer):
 
 
 def test_mfront_drained_triaxial(peer):
-    """README, different variant: 5 % on the axial strain and 2 % on p'c up to t = 0.8.
+    """Peer-data README, different variant: 5 % on the axial strain and 2 % on p'c up to
+    t = 0.8.
 
     Before t = 0.2 the axial strain is mostly elastic and the elastic laws differ
     (K = v p'/kappa against a constant E), so the strain is compared from t = 0.2.

@@ -89,9 +89,9 @@ def _footing(method):
 
 
 def test_fem_mesh_distorts_under_the_strip_footing():
-    """fem-th on the built-in footing, on a 5 B x 5 B domain of 11 x 11 nodes, to 0.5 B: the smallest angle falls
-    from 44.8 to 18.3 degrees (measured: 38.1 at 0.1 B, 25.3 at 0.3 B), quality from 0.86
-    to 0.50; no element inverts."""
+    """fem-th on the built-in footing, on a 5 B x 5 B domain of 11 x 11 nodes, to 0.5 B: the
+    smallest angle falls from 44.8 to 18.3 degrees (measured: 38.1 at 0.1 B, 25.3 at
+    0.3 B), quality from 0.86 to 0.50; no element inverts."""
     h = _footing("fem-th")
     angle, quality = h["min_angle"].to_numpy(), h["min_quality"].to_numpy()
     assert h["settlement@footing"].iloc[-1] == pytest.approx(0.5, rel=1e-9)

@@ -80,7 +80,8 @@ def test_a_full_report_runs_every_study_and_records_its_code(fake):
 
 def test_only_reruns_the_named_study_and_keeps_the_others_output(fake):
     report.make_report(fake)
-    beta = (fake / "studies" / "beta.pkl").read_bytes(), (fake / "studies" / "beta.json").read_text()
+    beta = ((fake / "studies" / "beta.pkl").read_bytes(),
+            (fake / "studies" / "beta.json").read_text())
     report.make_report(fake, only="alpha")
     assert len(runs("alpha")) == 2 and len(runs("beta")) == 1
     assert ((fake / "studies" / "beta.pkl").read_bytes(),

@@ -70,8 +70,9 @@ def test_tangent_is_the_derivative_of_the_residual(size):
 @pytest.mark.parametrize("law", ["taylor", "kozeny-carman"])
 def test_flux_tangent_follows_the_void_ratio(law):
     """With k = k(e), the flux rows' derivative in grad u (through ``v = v_n J``) is exact
-    in :func:`soilwater.physics.weakform.tangent`: central differences to 1e-7; and the buoyant weight
-    is a dead load (the momentum rows' value slot is ``w gamma'``, with no tangent)."""
+    in :func:`soilwater.physics.weakform.tangent`: central differences to 1e-7; and the
+    buoyant weight is a dead load (the momentum rows' value slot is ``w gamma'``, with no
+    tangent)."""
     fluid = Fluid(permeability=1e-4, gamma_w=10.0, permeability_law=law,
                   permeability_e=0.9, permeability_ck=0.4)
     material = LinearElastic(E=1000.0, nu=0.3, p0=5.0)
@@ -131,8 +132,8 @@ def _dense_tangent(C, effective, total, J, Finv, w, fluid, dt, beta, v_n, grad_p
     ("kozeny-carman", 1e-3, 1e-4, 35)])  # and the flux's change with the void ratio
 def test_compact_tangent_is_the_dense_construction_term_by_term(law, storage, permeability,
                                                                 terms):
-    """On random input at 50 points, every term of :func:`soilwater.physics.weakform.tangent` equals the
-    dense construction's to 1e-14 of its largest coefficient, and every coefficient the
+    """On random input at 50 points, every term of :func:`soilwater.physics.weakform.tangent`
+    equals the dense construction's to 1e-14 of its largest coefficient, and every coefficient the
     compact form leaves out is exactly zero there."""
     rng = np.random.default_rng(7)
     M = 50
