@@ -31,8 +31,10 @@ extensions = [
 ]
 
 templates_path = ["_templates"]
+# experiments/: the measurement scripts the study pages quote, and their README.
 exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "sg_execution_times.rst",
-                    "auto_examples/*.ipynb", "auto_examples/*.py", "auto_examples/*.zip"]
+                    "auto_examples/*.ipynb", "auto_examples/*.py", "auto_examples/*.zip",
+                    "experiments"]
 root_doc = "index"
 
 # Autodoc and autosummary: every module of the package, numpy-style docstrings.
