@@ -130,7 +130,11 @@ Schema (every case has the same one; unknown keys are an error)::
                                       # 1 <= scale <= 1000
     weight_p = "quartic"              # the same for the pore pressure p_w
     scale_p = 1.3
-    cells = "delaunay"                # background cells: delaunay or squares
+    integration = "paper"             # where the material state lives: "paper" (nodes,
+                                      # MLS-interpolated to cells rebuilt each step) or
+                                      # "gauss" (Gauss points of the initial Delaunay
+                                      # triangles, moved with the nodes)
+    cells = "delaunay"                # background cells: delaunay or squares ("paper")
     order = 2                         # Gauss order (squares: per direction; triangles:
                                       # degree, at most 19)
     essential = "penalty"             # essential conditions: "penalty" or "nitsche"
@@ -249,7 +253,8 @@ KEYS = {
     "segment": ("from", "to", "ux", "uy", "water", "settlement_rate", "force"),
     "loading": ("velocity_gradient", "load"),
     "time": ("end", "steps", "dt0", "growth", "dt_max", "on_failure"),
-    "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "cells", "order", "essential",
+    "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "integration", "cells", "order",
+            "essential",
             "penalty", "correction", "stabilisation", "stabilisation_factor"),
     "fem": ("remesh", "remesh_quality"),
 }

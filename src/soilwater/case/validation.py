@@ -22,7 +22,7 @@ from soilwater.case.model import (ANALYSES, MAX_STEPS, ON_FAILURE, STRESS_STARTS
 from soilwater.case.schema import (ASPECTS, GEOMETRIC, GRADINGS, KEYS, LENGTHS,
                                    MAX_TRIANGLE_ORDER, SCALES, SECTIONS)
 from soilwater.efg.settings import (CELLS, CORRECTIONS, DEFAULT_SCALE, ESSENTIAL,
-                                    STABILISATIONS, EFGSettings, Weight)
+                                    INTEGRATIONS, STABILISATIONS, EFGSettings, Weight)
 from soilwater.errors import InputError, require
 from soilwater.fem.settings import REMESH, FEMSettings
 from soilwater.material.fluid import PERMEABILITY_LAWS, Fluid
@@ -302,6 +302,8 @@ def _efg(table):
               "scale_u": number(table, "scale_u", "efg", defaults.scale_u),
               "weight_p": string(table, "weight_p", "efg", str(defaults.weight_p)),
               "scale_p": number(table, "scale_p", "efg", defaults.scale_p),
+              "integration": string(table, "integration", "efg", defaults.integration,
+                                    INTEGRATIONS),
               "cells": string(table, "cells", "efg", defaults.cells, CELLS),
               "order": order,
               "essential": string(table, "essential", "efg", defaults.essential,
@@ -313,6 +315,10 @@ def _efg(table):
                                        defaults.stabilisation, STABILISATIONS),
               "stabilisation_factor": number(table, "stabilisation_factor", "efg",
                                               defaults.stabilisation_factor)}
+    require(values["integration"] == "paper" or values["cells"] == "delaunay",
+            f"efg.cells = \"{values['cells']}\" needs efg.integration = \"paper\" (the "
+            f"\"{values['integration']}\" scheme integrates on the nodes' own triangles): "
+            "use efg.cells = \"delaunay\"")
     require(values["cells"] != "delaunay" or order <= MAX_TRIANGLE_ORDER,
             f"efg.order = {order} must be at most {MAX_TRIANGLE_ORDER} with efg.cells = "
             "\"delaunay\" (the highest triangle rule): lower it or use efg.cells = "

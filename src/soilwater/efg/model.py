@@ -1,5 +1,9 @@
 """What an EFG run keeps: the case's fixed data (:class:`Model`) and the material points
 (:class:`Points`), carried from step to step.
+
+The material points are the nodes with ``efg.integration = "paper"`` and the Gauss points
+of the initial Delaunay triangles with ``"gauss"`` (:data:`soilwater.efg.settings.
+INTEGRATIONS`).
 """
 
 from dataclasses import dataclass
@@ -7,27 +11,31 @@ from dataclasses import dataclass
 import numpy as np
 
 from soilwater.efg.boundary import boundary_points, segment_edges
+from soilwater.geometry.triangulation import delaunay_triangles
 from soilwater.physics.geostatic import total_stress
 from soilwater.physics.scales import Scales
 
 
 @dataclass
 class Points:
-    """The material points (nodes) and everything that is carried from step to step."""
+    """The nodes, the material points and everything that is carried from step to step."""
 
     nodes: np.ndarray        # (N, 2) current coordinates [m]
-    stress: np.ndarray       # (N, 4) effective stress, tension positive
-    state: dict              # material state at the nodes
+    stress: np.ndarray       # (P, 4) effective stress at the material points, tension +
+    state: dict              # material state at the material points
     p: np.ndarray            # (N,) pore pressure parameters, compression positive
     gap: np.ndarray          # (G, 2) u^h - u_bar at boundary points (constrained parts)
     plate: float             # rigid-plate settlement (uy, m)
     plate_gap: np.ndarray    # (G,) u_y^h - plate at the plate's points
     probes: np.ndarray       # (P, 2) current probe positions
-    stretching: np.ndarray   # (N, 4) nodal stretching D^I of the last step [1/s]
+    stretching: np.ndarray   # (P, 4) stretching of the last step at the material points
+                             # (paper: the nodal D^I of ERR) [1/s]
     uniqueness: float = 0.0  # the last step's soilwater.diagnostics.bifurcation indicator
     reactions: np.ndarray = None  # (S,) vertical force on the soil per named segment
     cells: object = None     # soilwater.efg.quadrature.Quadrature on ``nodes`` (next step's)
     rcond: float = np.nan    # smallest MLS rcond at the last step's integration points
+    boundary_stress: np.ndarray = None  # (G, 4) at the boundary points ("gauss", Nitsche)
+    boundary_state: dict = None         # material state there
 
 
 @dataclass
@@ -41,6 +49,7 @@ class Model:
     scales: Scales
     initial_bp: np.ndarray   # (G, 2) boundary points in the initial configuration [m]
     sigma0_bp: np.ndarray    # (G, 4) initial total stress there [kPa]
+    triangles: np.ndarray | None = None  # (C, 3) the Lagrangian cells of "gauss"
 
     @classmethod
     def build(cls, case):
@@ -48,8 +57,17 @@ class Model:
         loop = case.boundary_loop()
         edges = segment_edges(case.nodes(), loop, case.geometry)
         initial_bp = boundary_points(case.nodes(), loop, edges).points
+        triangles = None
+        if case.efg.integration == "gauss":
+            nodes = case.nodes()
+            triangles, _ = delaunay_triangles(nodes, nodes[loop])
         return cls(case, material, loop, edges, Scales.of(case, material), initial_bp,
-                   total_stress(case, material, initial_bp))
+                   total_stress(case, material, initial_bp), triangles)
+
+    @property
+    def gauss(self):
+        """True when the material state lives at the Gauss points of :attr:`triangles`."""
+        return self.triangles is not None
 
     @property
     def beta(self):

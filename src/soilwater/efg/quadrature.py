@@ -11,11 +11,13 @@ Inside/outside tests are :mod:`soilwater.geometry.polygon`'s raster; the triangl
 from typing import NamedTuple
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import spsolve
 from numpy.polynomial.legendre import leggauss
 from skfem.quadrature import get_quadrature
 from skfem.refdom import RefTri
 
-from soilwater.errors import require
+from soilwater.errors import ConvergenceError, require
 from soilwater.geometry.polygon import INSIDE, SQUARE, TOUCHED, path, raster
 from soilwater.geometry.triangulation import delaunay_triangles
 
@@ -158,12 +160,97 @@ def delaunay_cells(nodes, boundary, order=2):
     require(nodes.ndim == 2 and nodes.shape[1] == 2 and len(nodes) >= 3,
             f"nodes: shape {nodes.shape} must be (N, 2) with N >= 3 [m]")
     _order(order)
-    triangles, jac = delaunay_triangles(nodes, boundary)
+    triangles, _ = delaunay_triangles(nodes, boundary)
+    return lagrangian_cells(nodes, triangles, order)
+
+
+def lagrangian_cells(nodes, triangles, order=2):
+    """Fixed triangles of nodes, at the nodes' current positions, with a triangle rule of
+    degree ``order``: the background cells of ``efg.integration = "gauss"``, whose Gauss
+    point ``3 t + k`` is the same material point at every step.
+
+    Parameters
+    ----------
+    nodes : array_like, shape (N, 2)
+        Current node coordinates [m].
+    triangles : array_like of int, shape (C, 3)
+        Node indices, counter-clockwise in the initial configuration.
+    order : int
+        Polynomial degree integrated exactly on each triangle; default 2.
+
+    Returns
+    -------
+    Quadrature
+        With ``triangles``.
+
+    Raises
+    ------
+    ConvergenceError
+        Where a triangle has turned over or collapsed (its area is no longer positive).
+
+    Examples
+    --------
+    >>> square = np.array([[0, 0], [2, 0], [2, 2], [0, 2], [1, 1.]])
+    >>> q = lagrangian_cells(square, [[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]])
+    >>> len(q.points), float(q.weights.sum())
+    (12, 4.0)
+    """
+    nodes, triangles = np.asarray(nodes, dtype=float), np.asarray(triangles)
+    _order(order)
     cells = nodes[triangles]
+    edges = cells[:, 1:] - cells[:, :1]
+    jac = edges[:, 0, 0] * edges[:, 1, 1] - edges[:, 0, 1] * edges[:, 1, 0]
+    if not np.all(jac > 0):
+        raise ConvergenceError(f"a background cell inverts (area {jac.min() / 2:.3g} m2 "
+                               f"in cell {int(np.argmin(jac))})")
     xi, w = get_quadrature(RefTri, order)
-    points = cells[:, :1] + np.einsum("pj,tjd->tpd", xi.T, cells[:, 1:] - cells[:, :1])
+    points = cells[:, :1] + np.einsum("pj,tjd->tpd", xi.T, edges)
     return Quadrature(points.reshape(-1, 2), (jac[:, None] * w).ravel(), cells,
                       np.repeat(np.arange(len(cells)), len(w)), triangles)
+
+
+def nodal_average(quad, n, values):
+    """Gauss-point values projected onto the ``n`` nodes of triangular cells: the L2
+    projection onto linear triangles, ``M f_nodes = sum_q w_q N(x_q) f_q`` with the
+    consistent mass ``M``, exact for a field linear over the cells (a node no triangle
+    touches gets NaN).
+
+    Parameters
+    ----------
+    quad : Quadrature
+        Triangular cells (``triangles`` set), the same rule on every triangle.
+    n : int
+        Number of nodes.
+    values : ndarray, shape (M, ...)
+        One value (or array) per Gauss point.
+
+    Examples
+    --------
+    >>> square = np.array([[0, 0], [2, 0], [2, 2], [0, 2], [1, 1.]])
+    >>> q = lagrangian_cells(square, [[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]])
+    >>> f = nodal_average(q, 5, 2 * q.points[:, 0] + q.points[:, 1])
+    >>> bool(np.allclose(f, 2 * square[:, 0] + square[:, 1]))
+    True
+    """
+    triangles, w, cells = quad.triangles, quad.weights, quad.cells
+    per = len(w) // len(triangles)
+    local = quad.points.reshape(len(cells), per, 2) - cells[:, None, 0]
+    edges = np.swapaxes(cells[:, 1:] - cells[:, :1], 1, 2)                   # (C, 2, 2)
+    coords = np.linalg.solve(edges[:, None], local[..., None])[..., 0]        # (C, per, 2)
+    N = np.concatenate([1 - coords.sum(-1, keepdims=True), coords], -1).reshape(-1, 3)
+    rows = np.repeat(triangles, per, axis=0)                                 # (M, 3)
+    tested = sp.csr_matrix(((w[:, None] * N).ravel(),
+                            (rows.ravel(), np.repeat(np.arange(len(w)), 3))),
+                           shape=(n, len(w)))
+    interpolation = sp.csr_matrix((N.ravel(), (np.repeat(np.arange(len(w)), 3),
+                                               rows.ravel())), shape=(len(w), n))
+    mass = (tested @ interpolation).tocsc()
+    touched = np.asarray(tested.sum(1)).ravel() > 0
+    mass = mass + sp.diags((~touched).astype(float))
+    values = np.asarray(values, dtype=float)
+    nodal = np.atleast_2d(spsolve(mass, tested @ values.reshape(len(w), -1)).T).T
+    nodal[~touched] = np.nan
+    return nodal.reshape((n,) + values.shape[1:])
 
 
 def _gauss_squares(corners, size, order):

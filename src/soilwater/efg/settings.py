@@ -29,6 +29,11 @@ WEIGHT_FORMS = (f"quartic (alias Q), cubic, exp:C with {EXP_C[0]:g} <= C <= {EXP
 DEFAULT_SCALE = 1.3
 CELLS = ("delaunay", "squares")
 """Background integration cells of ``efg.cells``."""
+INTEGRATIONS = ("paper", "gauss")
+"""Where ``efg.integration`` keeps the material state: ``paper``, on the nodes, taken to
+the Gauss points of cells rebuilt each step by MLS interpolation and updated at the nodes
+after each step (the paper's scheme); ``gauss``, at the Gauss points of the initial
+Delaunay triangles moved with the nodes, where equilibrium is integrated."""
 ESSENTIAL = ("penalty", "nitsche")
 """Essential conditions of ``efg.essential``: penalty (:mod:`soilwater.efg.boundary`) or Nitsche's
 method (:mod:`soilwater.efg.essential.nitsche`)."""
@@ -148,8 +153,10 @@ class EFGSettings:
     ``weight_u`` and ``weight_p`` are :class:`Weight` objects (a name given instead is
     read by :meth:`Weight.parse`); ``scale_u`` and ``scale_p`` are the support scale
     factors (support = scale x distance to the 8th nearest node, dimensionless);
+    ``integration`` is where the material state lives (:data:`INTEGRATIONS`);
     ``cells`` is ``delaunay`` (rebuilt every step) or ``squares`` (quarter cells along
-    the boundary); ``order`` is the Gauss order of the cells; ``essential`` is how
+    the boundary), with ``integration = "paper"``; ``order`` is the Gauss order of the
+    cells; ``essential`` is how
     essential conditions are imposed, ``penalty`` (:mod:`soilwater.efg.boundary`) or ``nitsche``
     (:mod:`soilwater.efg.essential.nitsche`: consistent, beta from an eigenvalue bound, no factor to
     choose); ``penalty`` is the penalty factor relative to the stiffness scale (P-wave
@@ -174,6 +181,7 @@ class EFGSettings:
     scale_u: float = DEFAULT_SCALE
     weight_p: Weight = QUARTIC_WEIGHT
     scale_p: float = DEFAULT_SCALE
+    integration: str = "paper"
     cells: str = "delaunay"
     order: int = 2
     essential: str = "penalty"

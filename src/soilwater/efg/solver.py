@@ -25,10 +25,15 @@ is set at the nodes, and its total stress ``sigma0 . n`` at each boundary point'
 position loads the boundary, with the edge tractions; under gravity the buoyant weight at
 the integration points (:mod:`soilwater.physics.geostatic`) loads the domain.
 
-Material state lives on the nodes (the material points): at the start of a step the
-integration points take stress and state from the nodes by MLS interpolation, and after a
+Where the material state lives is ``efg.integration``. With ``"gauss"`` it lives at the
+Gauss points of the initial Delaunay triangles, which move with the nodes: each step
+starts from the stresses and states that satisfied equilibrium at the end of the last, and
+a step that would turn a triangle over is cut back. With ``"paper"`` (the paper's scheme)
+it lives on the nodes: at the start of a step the integration points of cells rebuilt on
+the current nodes take stress and state from the nodes by MLS interpolation, and after a
 converged step the nodes update their own state with the nodal stretching ``D^I`` (the one
-that enters ERR, paper eq. 1) and move by ``u^h(x_I)``.
+that enters ERR, paper eq. 1); that carried state is not in equilibrium. Either way the
+nodes move by ``u^h(x_I)``.
 
 Essential conditions act on total quantities, by penalty or by Nitsche's method
 (``efg.essential``; :mod:`soilwater.efg.essential`): each boundary Gauss point keeps the gap
@@ -59,6 +64,7 @@ from soilwater.efg.discretisation import background_cells, discretise, min_rcond
 from soilwater.efg.essential.penalty import factors
 from soilwater.efg.mls import ShapeFunctions
 from soilwater.efg.model import Model, Points
+from soilwater.efg.quadrature import lagrangian_cells, nodal_average
 from soilwater.efg.system import System
 from soilwater.material.kinematics import invariants
 from soilwater.nonlinear.history import history_row, timed
@@ -97,14 +103,28 @@ def solve(case, progress=True):
 def _initial_points(model):
     case = model.case
     nodes = case.nodes()
-    stress, state = initial_state(case, model.material, nodes)
+    cells = _cells(model, nodes) if model.gauss else None
+    material_points = nodes if cells is None else cells.points
+    stress, state = initial_state(case, model.material, material_points)
     n_bp = len(model.loop) * BOUNDARY_ORDER
+    boundary = (None, None)
+    if model.gauss and case.efg.essential == "nitsche":
+        boundary = initial_state(case, model.material, model.initial_bp)
     return Points(nodes=nodes, stress=stress, state=state,
+                  boundary_stress=boundary[0], boundary_state=boundary[1],
                   p=np.full(len(nodes), float(case.initial_pore_pressure)),
                   gap=np.zeros((n_bp, 2)), plate=0.0, plate_gap=np.zeros(n_bp),
                   probes=np.array([p.point for p in case.probes]).reshape(-1, 2),
-                  stretching=np.zeros((len(nodes), 4)),
-                  reactions=np.zeros(len(case.boundary.segments())))
+                  stretching=np.zeros((len(material_points), 4)),
+                  reactions=np.zeros(len(case.boundary.segments())), cells=cells)
+
+
+def _cells(model, nodes):
+    """The next step's background cells on ``nodes``: the Lagrangian triangles
+    (``gauss``) or new ones (``paper``)."""
+    if model.gauss:
+        return lagrangian_cells(nodes, model.triangles, model.case.efg.order)
+    return background_cells(model, nodes)
 
 
 def _step(model, points, t0, t1, stats):
@@ -119,7 +139,7 @@ def _step(model, points, t0, t1, stats):
     iterations, residual = newton(system, stats)
     done = system.finish()
     with timed(stats["timings"], "cells_s"):
-        done.cells = background_cells(model, done.nodes)
+        done.cells = _cells(model, done.nodes)
     done.rcond = min_rcond(disc)
     if model.case.diagnostics.uniqueness:
         done.uniqueness = _uniqueness(model, disc, system.domain_tangent(), system.n)
@@ -163,8 +183,9 @@ def _history_row(model, points, t, dt, info):
                  points.plate if seg.load_controlled else None)
                 for (_, seg), k, force in zip(case.boundary.segments(), case.segment_nodes(),
                                               points.reactions)]
+    weights = points.cells.weights if model.gauss else None
     return history_row(case, t, dt, info, points.stress, points.stretching,
-                       points.nodes[top], nodes0[top], probes=probes,
+                       points.nodes[top], nodes0[top], weights=weights, probes=probes,
                        uniqueness=uniqueness, segments=segments, cells=points.cells.cells,
                        rcond=points.rcond)
 
@@ -173,10 +194,16 @@ def _snapshot(model, points, t):
     s = model.case.efg
     at = ShapeFunctions.build(points.nodes, points.nodes, s.weight_p, s.scale_p,
                               key="efg.scale_p")
-    p, q = invariants(points.stress)
+    stress, stretching, state = points.stress, points.stretching, points.state
+    if model.gauss:                     # the Gauss-point state, projected for output
+        n = len(points.nodes)
+        stress, stretching = (nodal_average(points.cells, n, f) for f in (stress, stretching))
+        state = {k: nodal_average(points.cells, n, v) for k, v in state.items()}
+    p, q = invariants(stress)
     data = {"u": points.nodes - model.case.nodes(), "p_w": at.phi @ points.p,
-            "p_eff": p, "q": q, "stretching": points.stretching,
+            "p_eff": p, "q": q, "stretching": stretching,
             "support_radius": at.support}
-    data.update({k: v for k, v in points.state.items()})
-    data.update(permeability(model.case, points.state["v"]))
-    return Snapshot(t, points.nodes.copy(), data)
+    data.update(state)
+    data.update(permeability(model.case, state["v"]))
+    cells = [("triangle", model.triangles)] if model.gauss else []
+    return Snapshot(t, points.nodes.copy(), data, cells)

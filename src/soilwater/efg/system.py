@@ -54,8 +54,11 @@ class System:
         case, bc, su = model.case, disc.bc, disc.su
         self.model, self.points, self.disc, self.timings = model, points, disc, timings
         self.dt, self.n = t1 - t0, len(points.nodes)
-        self.stress_n = su.phi @ points.stress
-        self.state_n = {k: su.phi @ v for k, v in points.state.items()}
+        if model.gauss:                  # the state that satisfied equilibrium
+            self.stress_n, self.state_n = points.stress, points.state
+        else:                            # the paper's: MLS of the nodal state
+            self.stress_n = su.phi @ points.stress
+            self.state_n = {k: su.phi @ v for k, v in points.state.items()}
         self.p_n = disc.sp.phi @ points.p
         self.grad_p_n = pressure_gradient(disc.sp, points.p)
         self.du_bar = bc.target_increment(case.loading.L, disc.bp.points, self.dt)
@@ -84,9 +87,9 @@ class System:
         model, points, disc, n = self.model, self.points, self.disc, self.n
         bc, fluid = disc.bc, model.case.fluid
         (self.stress, self.state, self.material_tangent, self.J, self.Finv,
-         _) = material_update(model.material, self.stress_n, self.state_n,
-                              gradient(disc.su, self.du, n), self.timings,
-                              "a background cell")
+         self.deps) = material_update(model.material, self.stress_n, self.state_n,
+                                      gradient(disc.su, self.du, n), self.timings,
+                                      "a background cell")
         p_q = disc.sp.phi @ self.p
         self.total = weakform.total_stress(self.stress, p_q, fluid)
         self.grad_p = pressure_gradient(disc.sp, self.p)
@@ -212,12 +215,16 @@ class System:
         self.du, self.p = self.du + dx[:2 * n], self.p + dx[2 * n:3 * n]
 
     def finish(self):
-        """Nodal update after convergence: state with D^I, positions, gaps, probes."""
+        """The points after convergence: the converged Gauss-point state (``gauss``) or
+        the nodes' own update with D^I (``paper``), positions, gaps, probes."""
         points, disc, n = self.points, self.disc, self.n
         at = disc.at_points
-        stress, state, _, _, _, deps = material_update(
-            self.model.material, points.stress, points.state,
-            gradient(at.nodes, self.du, n), self.timings, "a node")
+        if self.model.gauss:
+            stress, state, deps = self.stress, self.state, self.deps
+        else:
+            stress, state, _, _, _, deps = material_update(
+                self.model.material, points.stress, points.state,
+                gradient(at.nodes, self.du, n), self.timings, "a node")
         move = self.du.reshape(2, n).T
         bc = disc.bc
         if self.nitsche is None:
@@ -228,7 +235,11 @@ class System:
         on = bc.segment >= 0
         reactions = np.bincount(bc.segment[on], force[on],
                                 minlength=len(self.model.case.boundary.segments()))
+        boundary = (None, None)
+        if self.model.gauss and self.nitsche is not None:
+            boundary = self.nitsche.carried()
         return Points(nodes=points.nodes + at.nodes.phi @ move, stress=stress, state=state,
+                      boundary_stress=boundary[0], boundary_state=boundary[1],
                       p=self.p, gap=np.where(disc.bc.constrained, self.gap, 0.0),
                       plate=self.plate,
                       plate_gap=np.where(disc.bc.rigid, self.plate_gap, 0.0),

@@ -22,8 +22,10 @@ class NitscheStep:
     boundary points and the terms of :class:`soilwater.efg.essential.nitsche.Nitsche` on
     ``(ux, uy, p_w)``.
 
-    The boundary points take stress, state and p_w from the nodes as the integration points
-    do, and their material update gives the flux (first Piola stress ``J sigma F^-T``, Darcy
+    The boundary points take stress and state from the nodes as the integration points do
+    (``efg.integration = "paper"``) or carry their own (``"gauss"``: those that
+    satisfied the last step's equilibrium, :meth:`carried`), take p_w from the nodes, and
+    their material update gives the flux (first Piola stress ``J sigma F^-T``, Darcy
     term) that the consistency term carries through the boundary. The reference operators
     are frozen over the step: the isotropic elastic moduli of the start-of-step state for u,
     ``-dt k/gamma_w`` at the start-of-step void ratio for p_w. beta =
@@ -38,8 +40,12 @@ class NitscheStep:
     def __init__(self, model, points, disc, dt, domain):
         sub, spb = disc.sub, disc.spb
         self.model, self.disc, self.dt = model, disc, dt
-        stress_n, state_n = sub.phi @ points.stress, {k: sub.phi @ v
-                                                      for k, v in points.state.items()}
+        if model.gauss:
+            stress_n, state_n = points.boundary_stress, points.boundary_state
+        else:
+            stress_n, state_n = sub.phi @ points.stress, {k: sub.phi @ v
+                                                          for k, v in points.state.items()}
+        self.all_n = stress_n, state_n
         self.terms = _nitsche_terms(model, disc, dt, domain, (stress_n, state_n["v"]))
         # the weak form only where a component is held: a free point carries no term
         # (and the soil at a free surface may be past what its return mapping handles)
@@ -55,7 +61,7 @@ class NitscheStep:
         """Residual coefficients (G, 3, 3) of the iterate ``du``, ``p`` with the gaps
         (G, 3) of ``(ux, uy, p_w)``."""
         model, disc, fluid, h = self.model, self.disc, self.model.case.fluid, self.held
-        (self.stress, _, self.material_tangent, self.J, self.Finv,
+        (self.stress, self.state, self.material_tangent, self.J, self.Finv,
          _) = material_update(model.material, self.stress_n, self.state_n,
                               gradient(disc.sub, du, len(p))[h], timings,
                               "a boundary point")
@@ -81,6 +87,17 @@ class NitscheStep:
         values = np.zeros((len(self.disc.bp.weights), c.values.shape[1]))
         values[self.held] = c.values
         return self.terms.tangent(replace(c, values=values))
+
+    def carried(self):
+        """Stress (G, 4) and state at every boundary point after the last
+        :meth:`residual`: the held points' update, the free points' start-of-step values
+        (they carry no term, so their state never enters a step)."""
+        stress, state = self.all_n
+        stress, state = stress.copy(), {k: v.copy() for k, v in state.items()}
+        stress[self.held] = self.stress
+        for k, v in self.state.items():
+            state[k][self.held] = v
+        return stress, state
 
     def reaction(self, gaps):
         """Force of the support on the soil at each point (G, 3) at the last
