@@ -1,6 +1,7 @@
 """Where EFG keeps its material state (``efg.integration``): the Gauss points of Lagrangian
-triangles (``gauss``) against the paper's nodes (``paper``), on the built-in strip footing
-(undrained Cam-clay, non-homogeneous) at 10 x 10 nodes, to 0.1 B.
+triangles (``gauss``) and the nodes of nodal integration (``nodal``) against the paper's
+nodes (``paper``), on the built-in strip footing (undrained Cam-clay, non-homogeneous) at
+10 x 10 nodes, to 0.1 B.
 
 Each test rates the paper's scheme as well, so that what it measures is seen to tell a
 consistent scheme from an inconsistent one.
@@ -54,40 +55,42 @@ def next_step(model, points, t0, t1=None):
     return System(model, points, disc, t0, t0 if t1 is None else t1, defaultdict(float))
 
 
-def test_gauss_carries_the_stress_that_satisfied_equilibrium():
+@pytest.mark.parametrize("integration", ["gauss", "nodal", "paper"])
+def test_a_consistent_scheme_carries_the_stress_that_satisfied_equilibrium(integration):
     """After a converged step, the stress carried to the next step, at the step's own
-    integration points, is the equilibrium stress with ``gauss``; the paper's nodal state,
-    MLS-interpolated back to those points, differs by several per cent of q."""
-    for integration in ("gauss", "paper"):
-        model, points, t = march(footing(integration, 10), 3)
-        system = next_step(model, points, t, t + 1.0)    # the fourth step
-        newton(system, stats())
-        carried = system.finish().stress
-        if integration == "paper":
-            carried = system.disc.su.phi @ carried
-        _, q_eq = invariants(system.stress)
-        _, q = invariants(carried)
-        error = np.linalg.norm(q - q_eq) / np.linalg.norm(q_eq)
-        assert error == 0 if integration == "gauss" else error > 0.01, (integration, error)
+    integration points, is the equilibrium stress with ``gauss`` and ``nodal``; the paper's
+    nodal state, MLS-interpolated back to those points, differs by several per cent of q."""
+    model, points, t = march(footing(integration, 10), 3)
+    system = next_step(model, points, t, t + 1.0)        # the fourth step
+    newton(system, stats())
+    carried = system.finish().stress
+    if integration == "paper":
+        carried = system.disc.su.phi @ carried
+    _, q_eq = invariants(system.stress)
+    _, q = invariants(carried)
+    error = np.linalg.norm(q - q_eq) / np.linalg.norm(q_eq)
+    assert error == 0 if integration != "paper" else error > 0.01, (integration, error)
 
 
 def test_the_carried_state_is_out_of_balance_only_by_the_reconfiguration_first_order_in_dt():
     """At the same settlement (0.03 m), the out-of-balance of the carried state at the next
-    step's start halves with dt for ``gauss`` (the MLS functions rebuilt on the moved
-    nodes); for ``paper`` it shrinks more slowly (its carried state is off equilibrium)."""
+    step's start halves with dt for ``gauss`` and ``nodal`` (the MLS functions and cells
+    rebuilt on the moved nodes); for ``paper`` it shrinks more slowly (its carried state is
+    off equilibrium)."""
     def out_of_balance(integration, steps):
         model, points, t = march(footing(integration, steps), steps * 3 // 10)
         return next_step(model, points, t).residual()[1]
 
-    ratios = {i: out_of_balance(i, 10) / out_of_balance(i, 20) for i in ("gauss", "paper")}
-    assert 1.8 < ratios["gauss"] < 2.2
-    assert ratios["paper"] < 1.6
+    ratios = {i: out_of_balance(i, 10) / out_of_balance(i, 20)
+              for i in ("gauss", "nodal", "paper")}
+    assert 1.8 < ratios["gauss"] < 2.2 and 1.8 < ratios["nodal"] < 2.2, ratios
+    assert ratios["paper"] < 1.6, ratios
 
 
 def test_the_footing_pressure_converges_at_first_order_in_dt():
     """Pressure at 0.1 B over Prandtl's with 5, 10 and 20 steps: successive differences
-    halve with ``gauss`` (penalty and Nitsche); the paper's scheme drifts by more with each
-    halving."""
+    halve with ``gauss`` and ``nodal`` (penalty and Nitsche); the paper's scheme drifts by
+    more with each halving."""
     def pressures(integration, *extra):
         out = []
         for steps in (5, 10, 20):
@@ -97,9 +100,10 @@ def test_the_footing_pressure_converges_at_first_order_in_dt():
                        / (PRANDTL * undrained_strength(case.material())))
         return np.diff(out)
 
-    for extra in ((), ("efg.essential=nitsche",)):
-        d = pressures("gauss", *extra)
-        assert 1.7 < d[0] / d[1] < 2.3, (extra, d)
+    for integration in ("gauss", "nodal"):
+        for extra in ((), ("efg.essential=nitsche",)):
+            d = pressures(integration, *extra)
+            assert 1.7 < d[0] / d[1] < 2.3, (integration, extra, d)
     d = pressures("paper")
     assert not 1.7 < d[0] / d[1] < 2.3
 
@@ -107,22 +111,26 @@ def test_the_footing_pressure_converges_at_first_order_in_dt():
 def test_the_undrained_volume_drift_does_not_grow_with_the_steps():
     """The specific volume at the material points moves off its initial value (exactly 0
     undrained) only by the weak constraint's spatial error with ``gauss``, the same for 5
-    and 20 steps; the paper's scheme adds to it at every step."""
+    and 20 steps, and not at all with ``nodal`` (one constraint per node: J = 1 there to the
+    Newton tolerance); the paper's scheme adds to it at every step."""
     def drift(integration, steps):
         case = footing(integration, steps)
         model = Model.build(case)
         v0 = solver._initial_points(model).state["v"]
         _, points, _ = march(case)
-        w = points.cells.weights if model.gauss else None
+        w = points.cells.weights if model.consistent else None
         return np.average(np.abs(points.state["v"] / v0 - 1), weights=w)
 
-    gauss, paper = ([drift(i, steps) for steps in (5, 20)] for i in ("gauss", "paper"))
+    gauss, nodal, paper = ([drift(i, steps) for steps in (5, 20)]
+                           for i in ("gauss", "nodal", "paper"))
     assert abs(gauss[1] / gauss[0] - 1) < 0.05
+    assert max(nodal) < 1e-6
     assert paper[1] / paper[0] > 1.2
 
 
-def test_gauss_writes_its_state_on_the_nodes_of_its_triangles():
-    case = footing("gauss", 2)
+@pytest.mark.parametrize("integration", ["gauss", "nodal"])
+def test_a_consistent_scheme_writes_its_state_on_the_nodes_of_its_triangles(integration):
+    case = footing(integration, 2)
     result = soilwater.solve(case, "efg", progress=False)
     mesh = result.mesh(-1)
     assert mesh.cells[0].type == "triangle" and len(mesh.points) == len(case.nodes())
@@ -132,7 +140,11 @@ def test_gauss_writes_its_state_on_the_nodes_of_its_triangles():
     assert np.all(result.history.p > 0)
 
 
-def test_gauss_takes_only_the_nodes_own_triangles():
-    with pytest.raises(InputError, match='efg.cells = "squares" needs efg.integration') as err:
-        footing("gauss", 2, "efg.cells=squares")
+@pytest.mark.parametrize("overrides, message", [
+    (("efg.integration=gauss", "efg.cells=squares"), 'efg.cells = "squares" needs'),
+    (("efg.integration=nodal", "efg.stabilisation=projection"), "nothing to project"),
+    (("efg.rebuild_quality=1.5",), "efg.rebuild_quality = 1.5 must lie between 0 and 1")])
+def test_settings_a_scheme_cannot_take_are_refused_in_one_line(overrides, message):
+    with pytest.raises(InputError, match=message) as err:
+        soilwater.load_case("strip-footing", *overrides)
     assert "\n" not in str(err.value)

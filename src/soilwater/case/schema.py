@@ -131,9 +131,12 @@ Schema (every case has the same one; unknown keys are an error)::
     weight_p = "quartic"              # the same for the pore pressure p_w
     scale_p = 1.3
     integration = "paper"             # where the material state lives: "paper" (nodes,
-                                      # MLS-interpolated to cells rebuilt each step) or
+                                      # MLS-interpolated to cells rebuilt each step),
                                       # "gauss" (Gauss points of the initial Delaunay
-                                      # triangles, moved with the nodes)
+                                      # triangles, moved with the nodes) or "nodal"
+                                      # (the nodes: stabilised conforming nodal
+                                      # integration on median-dual cells)
+    rebuild_quality = 0.3             # "nodal" re-triangulates below this cell quality
     cells = "delaunay"                # background cells: delaunay or squares ("paper")
     order = 2                         # Gauss order (squares: per direction; triangles:
                                       # degree, at most 19)
@@ -253,8 +256,8 @@ KEYS = {
     "segment": ("from", "to", "ux", "uy", "water", "settlement_rate", "force"),
     "loading": ("velocity_gradient", "load"),
     "time": ("end", "steps", "dt0", "growth", "dt_max", "on_failure"),
-    "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "integration", "cells", "order",
-            "essential",
+    "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "integration", "rebuild_quality",
+            "cells", "order", "essential",
             "penalty", "correction", "stabilisation", "stabilisation_factor"),
     "fem": ("remesh", "remesh_quality"),
 }

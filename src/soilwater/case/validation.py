@@ -304,6 +304,8 @@ def _efg(table):
               "scale_p": number(table, "scale_p", "efg", defaults.scale_p),
               "integration": string(table, "integration", "efg", defaults.integration,
                                     INTEGRATIONS),
+              "rebuild_quality": number(table, "rebuild_quality", "efg",
+                                        defaults.rebuild_quality),
               "cells": string(table, "cells", "efg", defaults.cells, CELLS),
               "order": order,
               "essential": string(table, "essential", "efg", defaults.essential,
@@ -319,6 +321,12 @@ def _efg(table):
             f"efg.cells = \"{values['cells']}\" needs efg.integration = \"paper\" (the "
             f"\"{values['integration']}\" scheme integrates on the nodes' own triangles): "
             "use efg.cells = \"delaunay\"")
+    require(0 < values["rebuild_quality"] < 1,
+            f"efg.rebuild_quality = {values['rebuild_quality']:g} must lie between 0 and 1 "
+            f"(a cell quality), e.g. {defaults.rebuild_quality:g}")
+    require(values["integration"] != "nodal" or values["stabilisation"] != "projection",
+            "efg.stabilisation = \"projection\" has nothing to project with "
+            "efg.integration = \"nodal\" (one point per cell): use \"perturbation\"")
     require(values["cells"] != "delaunay" or order <= MAX_TRIANGLE_ORDER,
             f"efg.order = {order} must be at most {MAX_TRIANGLE_ORDER} with efg.cells = "
             "\"delaunay\" (the highest triangle rule): lower it or use efg.cells = "

@@ -14,7 +14,7 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
-from soilwater.efg import vci
+from soilwater.efg import smoothing, vci
 from soilwater.efg.assembly import Pattern, scatter
 from soilwater.efg.boundary import boundary_points, conditions
 from soilwater.efg.mls import ShapeFunctions
@@ -39,6 +39,7 @@ class Discretisation:
     at_points: object
     patterns: dict
     cell: np.ndarray
+    triangles: np.ndarray | None = None
 
     @property
     def shared(self):
@@ -131,9 +132,15 @@ def discretise(model, nodes, evaluation, timings, quad=None):
         supports.setdefault(scale, shape.support)
         return shape
 
+    def domain(field="u"):
+        """At the integration points: MLS, or at the nodes with smoothed gradients."""
+        if s.integration != "nodal":
+            return build(quad.points, field)
+        return smoothing.shape_functions(quad, lambda at: build(at, field), s.order)
+
     with timed(timings, "shape_functions_s"):
-        su, sub = build(quad.points), build(bp.points)
-        sp_, spb = (su, sub) if same else (build(quad.points, "p"), build(bp.points, "p"))
+        su, sub = domain(), build(bp.points)
+        sp_, spb = (su, sub) if same else (domain("p"), build(bp.points, "p"))
         tu, tp = su, sp_
         if s.correction == "vci":
             tu = vci.corrected(su, quad.weights, sub, bp.weights, bp.normal)
@@ -143,7 +150,7 @@ def discretise(model, nodes, evaluation, timings, quad=None):
         at_points = AtPoints(at.subset(slice(0, n)), at.subset(slice(n, None)))
         disc = Discretisation(quad.weights, su, sp_, tu, tp, bp, sub, spb,
                                conditions(case, bp, model.initial_bp), at_points, {},
-                               quad.cell)
+                               quad.cell, quad.triangles)
     with timed(timings, "assembly_s"):
         disc.patterns.update({name: Pattern.build(*pairs)
                               for name, pairs in disc.blocks.items()})

@@ -1,9 +1,9 @@
 """What an EFG run keeps: the case's fixed data (:class:`Model`) and the material points
 (:class:`Points`), carried from step to step.
 
-The material points are the nodes with ``efg.integration = "paper"`` and the Gauss points
-of the initial Delaunay triangles with ``"gauss"`` (:data:`soilwater.efg.settings.
-INTEGRATIONS`).
+The material points are the nodes with ``efg.integration = "paper"`` or ``"nodal"`` and
+the Gauss points of the initial Delaunay triangles with ``"gauss"``
+(:data:`soilwater.efg.settings.INTEGRATIONS`).
 """
 
 from dataclasses import dataclass
@@ -49,7 +49,7 @@ class Model:
     scales: Scales
     initial_bp: np.ndarray   # (G, 2) boundary points in the initial configuration [m]
     sigma0_bp: np.ndarray    # (G, 4) initial total stress there [kPa]
-    triangles: np.ndarray | None = None  # (C, 3) the Lagrangian cells of "gauss"
+    triangles: np.ndarray | None = None  # (C, 3) initial triangles ("gauss", "nodal")
 
     @classmethod
     def build(cls, case):
@@ -58,16 +58,22 @@ class Model:
         edges = segment_edges(case.nodes(), loop, case.geometry)
         initial_bp = boundary_points(case.nodes(), loop, edges).points
         triangles = None
-        if case.efg.integration == "gauss":
+        if case.efg.integration != "paper":
             nodes = case.nodes()
             triangles, _ = delaunay_triangles(nodes, nodes[loop])
         return cls(case, material, loop, edges, Scales.of(case, material), initial_bp,
                    total_stress(case, material, initial_bp), triangles)
 
     @property
+    def consistent(self):
+        """True when the material state lives where equilibrium is integrated (``gauss``
+        and ``nodal``): a step starts from the state that satisfied it."""
+        return self.triangles is not None
+
+    @property
     def gauss(self):
         """True when the material state lives at the Gauss points of :attr:`triangles`."""
-        return self.triangles is not None
+        return self.case.efg.integration == "gauss"
 
     @property
     def beta(self):

@@ -198,15 +198,27 @@ def lagrangian_cells(nodes, triangles, order=2):
     nodes, triangles = np.asarray(nodes, dtype=float), np.asarray(triangles)
     _order(order)
     cells = nodes[triangles]
-    edges = cells[:, 1:] - cells[:, :1]
-    jac = edges[:, 0, 0] * edges[:, 1, 1] - edges[:, 0, 1] * edges[:, 1, 0]
-    if not np.all(jac > 0):
-        raise ConvergenceError(f"a background cell inverts (area {jac.min() / 2:.3g} m2 "
-                               f"in cell {int(np.argmin(jac))})")
+    jac = 2 * triangle_areas(cells)
     xi, w = get_quadrature(RefTri, order)
-    points = cells[:, :1] + np.einsum("pj,tjd->tpd", xi.T, edges)
+    points = cells[:, :1] + np.einsum("pj,tjd->tpd", xi.T, cells[:, 1:] - cells[:, :1])
     return Quadrature(points.reshape(-1, 2), (jac[:, None] * w).ravel(), cells,
                       np.repeat(np.arange(len(cells)), len(w)), triangles)
+
+
+def triangle_areas(cells):
+    """Areas (C,) [m2] of triangles (C, 3, 2) whose corners were counter-clockwise.
+
+    Raises
+    ------
+    ConvergenceError
+        Where a triangle has turned over or collapsed (its area is no longer positive).
+    """
+    edges = cells[:, 1:] - cells[:, :1]
+    area = 0.5 * (edges[:, 0, 0] * edges[:, 1, 1] - edges[:, 0, 1] * edges[:, 1, 0])
+    if not np.all(area > 0):
+        raise ConvergenceError(f"a background cell inverts (area {area.min():.3g} m2 "
+                               f"in cell {int(np.argmin(area))})")
+    return area
 
 
 def nodal_average(quad, n, values):

@@ -29,11 +29,16 @@ WEIGHT_FORMS = (f"quartic (alias Q), cubic, exp:C with {EXP_C[0]:g} <= C <= {EXP
 DEFAULT_SCALE = 1.3
 CELLS = ("delaunay", "squares")
 """Background integration cells of ``efg.cells``."""
-INTEGRATIONS = ("paper", "gauss")
+INTEGRATIONS = ("paper", "gauss", "nodal")
 """Where ``efg.integration`` keeps the material state: ``paper``, on the nodes, taken to
 the Gauss points of cells rebuilt each step by MLS interpolation and updated at the nodes
 after each step (the paper's scheme); ``gauss``, at the Gauss points of the initial
-Delaunay triangles moved with the nodes, where equilibrium is integrated."""
+Delaunay triangles moved with the nodes, where equilibrium is integrated; ``nodal``, on
+the nodes as the integration points of stabilised conforming nodal integration
+(:mod:`soilwater.efg.smoothing`), whose triangles are rebuilt when their quality falls
+below ``rebuild_quality``."""
+#: Default ``efg.rebuild_quality``: the FEM re-meshing's threshold (``fem.remesh_quality``).
+REBUILD_QUALITY = 0.3
 ESSENTIAL = ("penalty", "nitsche")
 """Essential conditions of ``efg.essential``: penalty (:mod:`soilwater.efg.boundary`) or Nitsche's
 method (:mod:`soilwater.efg.essential.nitsche`)."""
@@ -154,6 +159,8 @@ class EFGSettings:
     read by :meth:`Weight.parse`); ``scale_u`` and ``scale_p`` are the support scale
     factors (support = scale x distance to the 8th nearest node, dimensionless);
     ``integration`` is where the material state lives (:data:`INTEGRATIONS`);
+    ``rebuild_quality`` is the :func:`soilwater.geometry.quality.cell_quality` below which
+    ``nodal`` re-triangulates its nodes (dimensionless, 0 to 1);
     ``cells`` is ``delaunay`` (rebuilt every step) or ``squares`` (quarter cells along
     the boundary), with ``integration = "paper"``; ``order`` is the Gauss order of the
     cells; ``essential`` is how
@@ -182,6 +189,7 @@ class EFGSettings:
     weight_p: Weight = QUARTIC_WEIGHT
     scale_p: float = DEFAULT_SCALE
     integration: str = "paper"
+    rebuild_quality: float = REBUILD_QUALITY
     cells: str = "delaunay"
     order: int = 2
     essential: str = "penalty"

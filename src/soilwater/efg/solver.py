@@ -32,8 +32,12 @@ a step that would turn a triangle over is cut back. With ``"paper"`` (the paper'
 it lives on the nodes: at the start of a step the integration points of cells rebuilt on
 the current nodes take stress and state from the nodes by MLS interpolation, and after a
 converged step the nodes update their own state with the nodal stretching ``D^I`` (the one
-that enters ERR, paper eq. 1); that carried state is not in equilibrium. Either way the
-nodes move by ``u^h(x_I)``.
+that enters ERR, paper eq. 1); that carried state is not in equilibrium. With ``"nodal"``
+the nodes are the integration points (stabilised conforming nodal integration,
+:mod:`soilwater.efg.smoothing`) and keep the state their own equilibrium converged to;
+their smoothing cells come from triangles that move with the nodes and are re-triangulated
+when the worst falls below ``efg.rebuild_quality`` (nothing is carried: the state is on
+the nodes). Every scheme moves the nodes by ``u^h(x_I)``.
 
 Essential conditions act on total quantities, by penalty or by Nitsche's method
 (``efg.essential``; :mod:`soilwater.efg.essential`): each boundary Gauss point keeps the gap
@@ -65,6 +69,9 @@ from soilwater.efg.essential.penalty import factors
 from soilwater.efg.mls import ShapeFunctions
 from soilwater.efg.model import Model, Points
 from soilwater.efg.quadrature import lagrangian_cells, nodal_average
+from soilwater.efg.smoothing import nodal_cells
+from soilwater.geometry.quality import cell_quality
+from soilwater.geometry.triangulation import delaunay_triangles
 from soilwater.efg.system import System
 from soilwater.material.kinematics import invariants
 from soilwater.nonlinear.history import history_row, timed
@@ -103,12 +110,12 @@ def solve(case, progress=True):
 def _initial_points(model):
     case = model.case
     nodes = case.nodes()
-    cells = _cells(model, nodes) if model.gauss else None
+    cells = _cells(model, nodes) if model.consistent else None
     material_points = nodes if cells is None else cells.points
     stress, state = initial_state(case, model.material, material_points)
     n_bp = len(model.loop) * BOUNDARY_ORDER
     boundary = (None, None)
-    if model.gauss and case.efg.essential == "nitsche":
+    if model.consistent and case.efg.essential == "nitsche":
         boundary = initial_state(case, model.material, model.initial_bp)
     return Points(nodes=nodes, stress=stress, state=state,
                   boundary_stress=boundary[0], boundary_state=boundary[1],
@@ -119,12 +126,20 @@ def _initial_points(model):
                   reactions=np.zeros(len(case.boundary.segments())), cells=cells)
 
 
-def _cells(model, nodes):
-    """The next step's background cells on ``nodes``: the Lagrangian triangles
-    (``gauss``) or new ones (``paper``)."""
+def _cells(model, nodes, triangles=None):
+    """The next step's cells on ``nodes``: the Lagrangian triangles (``gauss``), the
+    smoothing cells of ``triangles`` (``nodal``; the initial ones by default), new
+    triangles where one of those is worse than ``efg.rebuild_quality`` or turned over, or
+    new background cells (``paper``)."""
+    s = model.case.efg
     if model.gauss:
-        return lagrangian_cells(nodes, model.triangles, model.case.efg.order)
-    return background_cells(model, nodes)
+        return lagrangian_cells(nodes, model.triangles, s.order)
+    if not model.consistent:
+        return background_cells(model, nodes)
+    triangles = model.triangles if triangles is None else triangles
+    if cell_quality(nodes[triangles])[1].min() < s.rebuild_quality:
+        triangles, _ = delaunay_triangles(nodes, nodes[model.loop])
+    return nodal_cells(nodes, triangles)
 
 
 def _step(model, points, t0, t1, stats):
@@ -139,7 +154,7 @@ def _step(model, points, t0, t1, stats):
     iterations, residual = newton(system, stats)
     done = system.finish()
     with timed(stats["timings"], "cells_s"):
-        done.cells = _cells(model, done.nodes)
+        done.cells = _cells(model, done.nodes, disc.triangles)
     done.rcond = min_rcond(disc)
     if model.case.diagnostics.uniqueness:
         done.uniqueness = _uniqueness(model, disc, system.domain_tangent(), system.n)
@@ -183,7 +198,7 @@ def _history_row(model, points, t, dt, info):
                  points.plate if seg.load_controlled else None)
                 for (_, seg), k, force in zip(case.boundary.segments(), case.segment_nodes(),
                                               points.reactions)]
-    weights = points.cells.weights if model.gauss else None
+    weights = points.cells.weights if model.consistent else None
     return history_row(case, t, dt, info, points.stress, points.stretching,
                        points.nodes[top], nodes0[top], weights=weights, probes=probes,
                        uniqueness=uniqueness, segments=segments, cells=points.cells.cells,
@@ -205,5 +220,5 @@ def _snapshot(model, points, t):
             "support_radius": at.support}
     data.update(state)
     data.update(permeability(model.case, state["v"]))
-    cells = [("triangle", model.triangles)] if model.gauss else []
+    cells = [("triangle", points.cells.triangles)] if model.consistent else []
     return Snapshot(t, points.nodes.copy(), data, cells)

@@ -1,11 +1,11 @@
 """Static linear elasticity with EFG (plane strain): the proving ground of the EFG core.
 
 One solve of ``(K + K_essential) u = f_traction + f_essential`` on the case's nodes, with
-the case's ``[efg]`` settings (weight, scale factor, background cells, Gauss order,
-essential conditions by penalty or by Nitsche's method
-(:mod:`soilwater.efg.essential.nitsche`, reference operator the elastic stiffness itself), gradient correction: with ``vci`` the stiffness
-pairs corrected test gradients with MLS trial gradients and is not symmetric; SuperLU
-solves it).
+the case's ``[efg]`` settings (weight, scale factor, background cells or nodal
+integration, Gauss order, essential conditions by penalty or by Nitsche's method
+(:mod:`soilwater.efg.essential.nitsche`, reference operator the elastic stiffness
+itself), gradient correction: with ``vci`` the stiffness pairs corrected test gradients
+with MLS trial gradients and is not symmetric; SuperLU solves it).
 Prescribed displacements are those of the case at ``time.end``: ``fixed`` is zero,
 ``prescribed`` is ``L x t_end`` and ``exact`` comes from the case's ``[exact]`` solution,
 which also gives ``exact`` tractions and the reference for the error norms.
@@ -23,7 +23,7 @@ import scipy.sparse.linalg as spla
 
 from soilwater.efg.essential import nitsche
 from soilwater.efg import quadrature
-from soilwater.efg import vci
+from soilwater.efg import smoothing, vci
 from soilwater.efg.assembly import Pattern, elasticity_coefficients, scatter
 from soilwater.efg.boundary import (boundary_points, conditions, load_vector, penalty_coefficients,
                           segment_edges)
@@ -31,6 +31,7 @@ from soilwater.efg.mls import ShapeFunctions
 from soilwater.references.closed_forms import strain_from_stress
 from soilwater.material.kinematics import cauchy_traction
 from soilwater.errors import InputError
+from soilwater.geometry.triangulation import delaunay_triangles
 from soilwater.results import Result, Snapshot
 
 
@@ -55,8 +56,15 @@ def solve(case):
     tic = time.perf_counter()
     nodes = case.nodes()
     loop = case.boundary_loop()
-    quad = quadrature.background(case, nodes, loop, settings)
-    shape = ShapeFunctions.build(nodes, quad.points, settings.weight_u, settings.scale_u)
+    def build(points):
+        return ShapeFunctions.build(nodes, points, settings.weight_u, settings.scale_u)
+
+    if settings.integration == "nodal":
+        quad = smoothing.nodal_cells(nodes, delaunay_triangles(nodes, nodes[loop])[0])
+        shape = smoothing.shape_functions(quad, build, settings.order)
+    else:
+        quad = quadrature.background(case, nodes, loop, settings)
+        shape = build(quad.points)
     bp = boundary_points(nodes, loop, segment_edges(nodes, loop, case.geometry))
     shape_b = ShapeFunctions.build(nodes, bp.points, settings.weight_u, settings.scale_u)
     test = shape

@@ -54,7 +54,7 @@ class System:
         case, bc, su = model.case, disc.bc, disc.su
         self.model, self.points, self.disc, self.timings = model, points, disc, timings
         self.dt, self.n = t1 - t0, len(points.nodes)
-        if model.gauss:                  # the state that satisfied equilibrium
+        if model.consistent:             # the state that satisfied equilibrium
             self.stress_n, self.state_n = points.stress, points.state
         else:                            # the paper's: MLS of the nodal state
             self.stress_n = su.phi @ points.stress
@@ -215,11 +215,12 @@ class System:
         self.du, self.p = self.du + dx[:2 * n], self.p + dx[2 * n:3 * n]
 
     def finish(self):
-        """The points after convergence: the converged Gauss-point state (``gauss``) or
-        the nodes' own update with D^I (``paper``), positions, gaps, probes."""
+        """The points after convergence: the converged state at the integration points
+        (``gauss``, ``nodal``) or the nodes' own update with D^I (``paper``), positions,
+        gaps, probes."""
         points, disc, n = self.points, self.disc, self.n
         at = disc.at_points
-        if self.model.gauss:
+        if self.model.consistent:
             stress, state, deps = self.stress, self.state, self.deps
         else:
             stress, state, _, _, _, deps = material_update(
@@ -236,7 +237,7 @@ class System:
         reactions = np.bincount(bc.segment[on], force[on],
                                 minlength=len(self.model.case.boundary.segments()))
         boundary = (None, None)
-        if self.model.gauss and self.nitsche is not None:
+        if self.model.consistent and self.nitsche is not None:
             boundary = self.nitsche.carried()
         return Points(nodes=points.nodes + at.nodes.phi @ move, stress=stress, state=state,
                       boundary_stress=boundary[0], boundary_state=boundary[1],

@@ -23,7 +23,7 @@ class NitscheStep:
     ``(ux, uy, p_w)``.
 
     The boundary points take stress and state from the nodes as the integration points do
-    (``efg.integration = "paper"``) or carry their own (``"gauss"``: those that
+    (``efg.integration = "paper"``) or carry their own (``"gauss"``, ``"nodal"``: those that
     satisfied the last step's equilibrium, :meth:`carried`), take p_w from the nodes, and
     their material update gives the flux (first Piola stress ``J sigma F^-T``, Darcy
     term) that the consistency term carries through the boundary. The reference operators
@@ -40,7 +40,7 @@ class NitscheStep:
     def __init__(self, model, points, disc, dt, domain):
         sub, spb = disc.sub, disc.spb
         self.model, self.disc, self.dt = model, disc, dt
-        if model.gauss:
+        if model.consistent:
             stress_n, state_n = points.boundary_stress, points.boundary_state
         else:
             stress_n, state_n = sub.phi @ points.stress, {k: sub.phi @ v
