@@ -46,6 +46,14 @@ def test_a_result_of_another_linear_solver_is_never_reused(tmp_path, monkeypatch
     assert not run([job], workers=1, cache_dir=tmp_path, progress=False)[0].cached
 
 
+def test_a_method_s_settings_do_not_key_the_other_methods_runs():
+    """``[efg]`` keys EFG's runs only and ``[fem]`` FEM's only."""
+    efg, fem = Job("soil-column", "efg"), Job("soil-column", "fem-th")
+    assert Job("soil-column", "fem-th", ("efg.scale_u=1.6",)).key() == fem.key()
+    assert Job("soil-column", "efg", ("fem.remesh=delaunay",)).key() == efg.key()
+    assert Job("soil-column", "efg", ("efg.scale_u=1.6",)).key() != efg.key()
+
+
 def test_a_change_to_one_solver_keeps_the_other_solvers_runs(tmp_path, monkeypatch):
     """The cache key hashes only the sources a method depends on: editing ``efg/``
     changes EFG's keys and not FEM's; editing the shared library changes both; editing a

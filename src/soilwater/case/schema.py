@@ -5,8 +5,8 @@ A case is a TOML file (or a built-in name, see
 :func:`soilwater.case.validation.case_from_dict` checks it against this schema and builds
 the :class:`soilwater.case.model.Case` the solvers read. This module holds the schema's
 documentation and constants (the sections and their keys, the bounds) and the edits of a
-raw case dict (:func:`apply_override`, :func:`expand_displacement`). Units are those of the case (kPa, m, s in the built-in
-cases).
+raw case dict (:func:`apply_override`, :func:`expand_displacement`). Units are those of the
+case (kPa, m, s in the built-in cases).
 
 Conventions: x to the right, y up, origin at the lower-left corner of the rectangle;
 stress and traction are tension positive (a traction ``[0, -1]`` on the top edge is a
@@ -42,7 +42,8 @@ Schema (every case has the same one; unknown keys are an error)::
                                       # fraction of the smallest spacing (0 <= jitter < 0.25)
     seed = 0                          # seed of the jitter (numpy default_rng)
 
-    [material]                        # soilwater.material.presets.material_from_spec, plus fluid keys:
+    [material]                        # soilwater.material.presets.material_from_spec, plus fluid
+                                      # keys:
     preset = "table1"
     model = "original"                # "original", "modified" or "elastic"
     permeability = 0.0                # k [m/s] >= 0 (Darcy: q = -(k/gamma_w) grad p_w)
@@ -121,7 +122,8 @@ Schema (every case has the same one; unknown keys are an error)::
     [diagnostics]                     # optional, both solvers
     uniqueness = false                # per step, the smallest eigenvalue of the tangent
                                       # restricted to the undrained constraint
-                                      # (soilwater.diagnostics.bifurcation; history column "uniqueness")
+                                      # (soilwater.diagnostics.bifurcation; history
+                                      # column "uniqueness")
 
     [efg]                             # optional meshless settings (defaults shown)
     weight_u = "quartic"              # MLS weight of u: quartic (Q), cubic or exp:C with

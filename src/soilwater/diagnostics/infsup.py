@@ -43,7 +43,8 @@ def coefficients(weights, length, perturbation=0.0):
     weights : ndarray, shape (M,)
         Integration weights [m2].
     length : float
-        Length scale of the H1 norm's value term [m] (:func:`soilwater.diagnostics.bifurcation.h1_gram`).
+        Length scale of the H1 norm's value term [m]
+        (:func:`soilwater.diagnostics.bifurcation.h1_gram`).
     perturbation : float
         A flow-equation perturbation ``beta`` times the stiffness that scales ``S`` [m2]
         (``h^2 / 4`` for :attr:`soilwater.physics.scales.Scales.perturbation`); 0 without one.

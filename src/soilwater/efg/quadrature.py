@@ -125,9 +125,11 @@ def square_cells(boundary, spacing, order=2):
 def delaunay_cells(nodes, boundary, order=2):
     """Delaunay triangles of the current nodes, with a triangle rule of degree ``order``.
 
-    The triangles are :func:`soilwater.geometry.triangulation.delaunay_triangles`: those whose centroid
+    The triangles are :func:`soilwater.geometry.triangulation.delaunay_triangles`: those whose
+    centroid
     lies outside the boundary polygon (the concave parts of a deformed boundary) and
-    degenerate ones are dropped. The rule is scikit-fem's for the reference triangle; the default degree 2 has 3 points
+    degenerate ones are dropped. The rule is scikit-fem's for the reference triangle; the default
+    degree 2 has 3 points
     with positive weights (degree 3 has a negative weight).
 
     Parameters

@@ -16,7 +16,8 @@ from dataclasses import dataclass, fields
 from soilwater.errors import require
 
 QUARTIC, CUBIC, EXPONENTIAL = 0, 1, 2
-"""Integer kind codes of the weight families (read by the numba kernels of soilwater.efg.weights)."""
+"""Integer kind codes of the weight families (read by the numba kernels of
+soilwater.efg.weights)."""
 KIND_CODES = {"quartic": QUARTIC, "cubic": CUBIC, "exp": EXPONENTIAL}
 """Kind code of each weight family."""
 WEIGHT_ALIASES = {"q": "quartic", "e-a": "exp:0.5", "e-b": "exp:0.25"}

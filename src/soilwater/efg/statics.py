@@ -108,7 +108,8 @@ def _penalty(case, material, domain, shape_b, bp, constrained, u_bar):
 
 def _nitsche(case, material, domain, shape_b, bp, constrained, u_bar):
     """Nitsche coefficients (:class:`soilwater.physics.weakform.Coefficients` of 2 x 2
-    fields at the G boundary points), right-hand side (2N,) and beta [kPa/m]: the reference operator is
+    fields at the G boundary points), right-hand side (2N,) and beta [kPa/m]: the reference operator
+    is
     the stiffness itself, so the consistency and adjoint terms cancel in ``v K v``
     (:mod:`soilwater.efg.essential.nitsche`).
 

@@ -37,8 +37,8 @@ STRENGTH = 0.01
 #: lands where exact Newton's does and Newton converges quadratically from there: the
 #: undrained bench step takes 4 residuals at 3e3 to 1e5 nodes against 5 at 1e-4 (whose first
 #: iterate is 30 % further off), with fewer FGMRES iterations; 1e-6 as many residuals and
-#: more FGMRES iterations (``python docs/krylov_study.py --newton 3000 1e-2 1e-4 1e-5
-#: 1e-6``).
+#: more FGMRES iterations (``python docs/experiments/krylov_newton.py --nodes 3000
+#: --forcings 1e-2 1e-4 1e-5 1e-6``).
 FORCING = 1e-5
 
 
@@ -278,7 +278,7 @@ def policy(settings):
     The Krylov back-end suits EFG with Nitsche's conditions (a penalty's diagonal spans
     10^6: a small residual says nothing of the error) and a pressure stabilisation, and
     PARDISO factorises such a tangent in single precision (measured: ``python
-    docs/krylov_study.py --single``); any other EFG is solved directly in double. Every
+    docs/experiments/direct_single.py``); any other EFG is solved directly in double. Every
     EFG tangent takes the Schwarz smoother, the threshold :data:`STRENGTH` and the
     forcing cap :data:`FORCING` (read when called).
 

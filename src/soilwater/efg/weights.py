@@ -12,7 +12,8 @@ Each weight peaks at ``r = 0``, decreases to 0 at ``r = 1`` and is zero for ``r 
 A case names a weight by a string, read once at load time into a
 :class:`soilwater.efg.settings.Weight` (the names' grammar, the aliases ``Q``, ``E-A``, ``E-B``,
 the range of ``c`` and the integer kind codes live in :mod:`soilwater.efg.settings`, shared with
-the load-time validation of a case, which must not import ``efg``). Numba kernels call :func:`weight_scalar` with the Weight's kind
+the load-time validation of a case, which must not import ``efg``). Numba kernels call
+:func:`weight_scalar` with the Weight's kind
 code and ``c``, and :func:`evaluate` gives ``w`` and ``dw/dr`` on whole arrays. numba's
 on-disk cache does not track calls across files: after editing this module, delete the
 ``*.nbi`` and ``*.nbc`` files in ``efg/__pycache__`` so that the kernels of

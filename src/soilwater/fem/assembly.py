@@ -46,7 +46,8 @@ def block(test, trial, coeff):
 
     Rows ``f test.n + test.dofs[a]``, columns ``g trial.n + trial.dofs[b]``; batched
     matrix products over (element, point), one field pair ``(f, g)`` of ``coeff``
-    (:class:`soilwater.physics.weakform.Coefficients`) at a time. Besides the element matrices (E, F,
+    (:class:`soilwater.physics.weakform.Coefficients`) at a time. Besides the element matrices (E,
+    F,
     G, a, b) it allocates, per pair, its slot matrices (E Q, 3, 3) and the products (E, Q,
     a, b): never all field pairs' coefficients at once.
     """

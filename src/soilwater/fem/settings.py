@@ -6,7 +6,8 @@ REMESH = ("never", "delaunay")
 """Re-meshing of the FEM reference, ``fem.remesh``: never (the initial topology throughout)
 or the Delaunay triangles of the current vertices (:mod:`soilwater.geometry.triangulation`)."""
 REMESH_QUALITY = 0.3
-"""Default ``fem.remesh_quality``: about the :func:`soilwater.geometry.quality.cell_quality` of a triangle
+"""Default ``fem.remesh_quality``: about the :func:`soilwater.geometry.quality.cell_quality` of a
+triangle
 with a 10 degree corner (a right triangle 0.296) or a 150 degree one (the isosceles
 triangle 0.302), the angles that mesh generators keep their triangles away from; the
 undeformed grid's right isosceles triangles have 0.866."""

@@ -35,7 +35,7 @@ class Pair:
     it (inf-sup stable or stabilised), so that it is the default on large systems
     (:class:`soilwater.linalg.layout.Layout`). ``single``: PARDISO factorises its tangents in single
     precision (:attr:`soilwater.linalg.layout.Layout.single`), where measured to pay
-    (``python docs/krylov_study.py --single``): fem-th (one bench step's solve at 10^5
+    (``python docs/experiments/direct_single.py``): fem-th (one bench step's solve at 10^5
     nodes 31.3 s against 44.8 s); not fem-p1p1-stab (6.6 s against 6.4 s, and 65 of the
     199 factorisations of its unconfined compression were redone in double); fem-q2q1
     not measured.

@@ -2,7 +2,8 @@
 angle and a normalised shape measure of every cell, vectorised over cells.
 
 Both solvers report the worst cell of each level in their history (``min_angle``,
-``min_quality``, :func:`soilwater.nonlinear.history.history_row`): the FEM reference on its moved mesh,
+``min_quality``, :func:`soilwater.nonlinear.history.history_row`): the FEM reference on its moved
+mesh,
 EFG on the background cells it integrates on.
 """
 

@@ -54,7 +54,7 @@ KRYLOV_FROM = 900_000
 #: solves in double (:class:`soilwater.linalg.pardiso._Pardiso`). On the first tangent
 #: of the bench step (Nitsche EFG, 10^5 nodes) the single factorisation took 16.2 s against
 #: 28.2 s, and each refinement divides the scaled residual by about 3000 (``python
-#: docs/krylov_study.py --single``).
+#: docs/experiments/direct_single.py``).
 SINGLE = True
 
 

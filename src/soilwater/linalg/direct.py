@@ -16,7 +16,7 @@ from soilwater.errors import ConvergenceError
 #: tangent of the bench step it factorised EFG's 2.6 times faster than scipy's default,
 #: COLAMD, at 10^4 nodes (8.4 s against 21.3 s, a quarter less fill) and 1.7 times at
 #: 3 x 10^3, P1/P1's 1.5 and Q2/Q1's 1.1 to 1.35 times; Taylor-Hood's as fast at 3 x 10^3
-#: and 11 % slower at 10^4 (``python docs/krylov_study.py --orderings``).
+#: and 11 % slower at 10^4 (``python docs/experiments/direct_orderings.py``).
 SUPERLU_ORDERING = "MMD_ATA"
 
 

@@ -31,7 +31,7 @@ stabilisation of a stabilised pair is what ``D`` holds, and the mass term keeps
 :math:`\\hat S` definite where ``D`` vanishes. EFG's ``M_p`` is the consistent matrix:
 its MLS functions overlap so widely that the lumped mass overstates rough pressure modes
 (with exact block solves FGMRES takes 319 iterations with it at 10^4 nodes, 11 with the
-consistent one: ``python docs/krylov_study.py --schur``).
+consistent one: ``python docs/experiments/schur.py``).
 
 Unknowns of neither field (a rigid plate's settlement, the mean-pressure multiplier) are
 eliminated exactly through the preconditioner (a dense Schur complement of their few

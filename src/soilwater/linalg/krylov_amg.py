@@ -13,7 +13,7 @@ turn (their inverses kept), forward before the coarse correction and backward af
 order whose independent subdomains are solved side by side on every core. Gauss-Seidel
 smooths a wide MLS stencil poorly (77 FGMRES iterations against 19 at 10^4 nodes, the
 Schur complement solved exactly), and P1 and Q2 elements well enough that Schwarz's
-dearer sweeps do not pay (``python docs/krylov_study.py --smoother``).
+dearer sweeps do not pay (``python docs/experiments/krylov_smoother.py``).
 The AMG setup runs under a fixed random seed (:func:`_seeded`), so a preconditioner, and a
 run's iteration counts, repeat.
 """

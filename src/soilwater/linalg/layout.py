@@ -65,26 +65,26 @@ class Policy:
         PARDISO factorises the tangent in single precision and refines each solve in
         double (:data:`soilwater.linalg.backends.SINGLE`,
         :class:`soilwater.linalg.pardiso._Pardiso`): where measured to pay (``python
-        docs/krylov_study.py --single``; EFG with Nitsche's conditions and a
+        docs/experiments/direct_single.py``; EFG with Nitsche's conditions and a
         stabilisation, fem-th). A penalty's tangent, whose diagonal spans 10^6, is beyond
         a single factor's refinement.
     forcing : float
         The largest relative residual of an inexact-Newton Krylov solve
         (:func:`forcing`), ``0 < forcing < 1``: :data:`FORCING_MAX` unless the
-        discretisation asks for another (``python docs/krylov_study.py --newton``).
+        discretisation asks for another (``python docs/experiments/krylov_newton.py``).
     smoother : str
         How the Krylov back-end's AMG V-cycles smooth their finest level:
         ``"gauss_seidel"`` (symmetric Gauss-Seidel on node blocks) or ``"schwarz"``
         (multiplicative Schwarz on overlapping aggregates,
         :class:`soilwater.linalg.krylov_schwarz.Schwarz`: dearer per sweep, it pays for MLS's
         wide stencils and for fem-th through a softening peak; ``python
-        docs/krylov_study.py --smoother``).
+        docs/experiments/krylov_smoother.py``).
     strength : float
         The strength-of-connection threshold ``theta`` of the Krylov back-end's AMG
         hierarchies, ``0 <= theta < 1``: a coupling counts (aggregates and Schwarz
         subdomains grow along it) where ``|a_ij| >= theta sqrt(|a_ii a_jj|)``. 0 (every
         coupling; pyamg's default) unless the discretisation asks for more (``python
-        docs/krylov_study.py --strength``).
+        docs/experiments/krylov_strength.py``).
 
     Raises
     ------

@@ -46,7 +46,8 @@ class Material(ABC):
     @abstractmethod
     def k0_nc(self):
         """The ratio ``sigma'_h / sigma'_v`` of normally consolidated one-dimensional
-        compression (``initial.k0 = "nc"`` of a geostatic start, :mod:`soilwater.physics.geostatic`)."""
+        compression (``initial.k0 = "nc"`` of a geostatic start,
+        :mod:`soilwater.physics.geostatic`)."""
 
     @abstractmethod
     def moduli(self, p=None, v=None):

@@ -35,7 +35,8 @@ constrained boundary (:func:`largest_eigenvalue`).
 
 Layout: the fields and slots of :mod:`soilwater.physics.weakform` (value, d/dx, d/dy on x_n), at the
 boundary points with their line weights [m per unit thickness]; every operator and
-tangent is a :class:`soilwater.physics.weakform.Coefficients`, its terms in use. The consistency term
+tangent is a :class:`soilwater.physics.weakform.Coefficients`, its terms in use. The consistency
+term
 is the weak form's flux through the boundary, an operation on terms (:func:`_through`):
 a term ``(f, 1 + k, g, t)`` of the test gradient times ``n_k`` adds to the value term
 ``(f, 0, g, t)``; the adjoint term is the transpose of the reference operator's flux,
@@ -199,7 +200,8 @@ def _summed(parts, fields):
 def gradient_operator(C):
     """The operator ``D(f, 1 + k, g, 1 + l) = d sigma_fk / d(d u_g / d x_l)`` of Voigt
     tangents C (P, 4, 4) [kPa] (strain ``(xx, yy, zz, 2xy)`` to stress ``(xx, yy, zz,
-    xy)``), made symmetric (``(C + C^T) / 2``): :class:`soilwater.physics.weakform.Coefficients` of 2 x
+    xy)``), made symmetric (``(C + C^T) / 2``): :class:`soilwater.physics.weakform.Coefficients` of
+    2 x
     2 fields, its gradient terms without weight
     (:func:`soilwater.efg.assembly.elasticity_coefficients` of unit weights)."""
     C = np.asarray(C, float)

@@ -56,10 +56,14 @@ class Job:
     linear_solver: str | None = None
 
     def key(self):
-        """Cache key: the resolved case, the method, the linear solver and the code."""
+        """Cache key: the resolved case without the other methods' settings (an EFG run
+        does not read ``[fem]``, nor a FEM run ``[efg]``), the method, the linear solver
+        and the code."""
         with linear_solver(self.linear_solver):
             solver = identity()
-        spec = {"case": load_case(self.case, self.overrides).to_dict(),
+        case = load_case(self.case, self.overrides).to_dict()
+        case.pop("fem" if self.method == "efg" else "efg", None)
+        spec = {"case": case,
                 "method": self.method, "linear_solver": solver,
                 "code": code_version(self.method)}
         return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:24]
