@@ -215,6 +215,15 @@ def test_gibson():
     assert 0 < small["final"] < small["small_final"]
 
 
+def test_integration_schemes_steps():
+    table = script("integration").main(["--steps", "--core", "2", "--counts", "25", "50",
+                                        "--schemes", "gauss", "paper"])["steps"]
+    assert set(table) == {"gauss", "paper"}
+    assert all(1.0 < p < 1.2 for p in table["gauss"]), table     # over Prandtl's, 0.1 B
+    script("integration").main(["--consistency", "--drift", "--core", "2", "--counts", "25",
+                                "--first", "1", "--schemes", "nodal"])
+
+
 def test_bad_input_is_one_line(capsys):
     with pytest.raises(SystemExit) as stopped:
         script("krylov_runs").main(["--set", "time.steps=-1"])
