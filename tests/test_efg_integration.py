@@ -19,7 +19,7 @@ from soilwater.efg.model import Model
 from soilwater.efg.system import System
 from soilwater.errors import InputError
 from soilwater.material.kinematics import invariants
-from soilwater.nonlinear.newton import newton
+from soilwater.nonlinear.newton import new_counts, newton
 from soilwater.references.closed_forms import PRANDTL, undrained_strength
 from soilwater.studies.harness.grids import refined
 
@@ -34,8 +34,8 @@ def footing(integration, steps, *extra):
 
 
 def stats():
-    return defaultdict(float, timings=defaultdict(float), linear_iterations=0,
-                       factorisations=0, factor_flops=0.0, symmetric_factorisations=0)
+    """Newton's statistics at zero: its counts and the phase timings."""
+    return {"timings": defaultdict(float), **new_counts()}
 
 
 def march(case, steps=None):

@@ -29,7 +29,7 @@ from soilwater.efg.discretisation import discretise
 from soilwater.efg.model import Model
 from soilwater.efg.system import System
 from soilwater.material.kinematics import invariants
-from soilwater.nonlinear.newton import TOLERANCE, newton
+from soilwater.nonlinear.newton import TOLERANCE, new_counts, newton
 from soilwater.references.closed_forms import PRANDTL, undrained_strength
 from soilwater.studies.harness.grids import refined
 
@@ -46,8 +46,8 @@ def footing(core, scheme, steps_per_half, end=TO_TENTH, extra=()):
 
 
 def _stats():
-    return defaultdict(float, timings=defaultdict(float), linear_iterations=0,
-                       factorisations=0, factor_flops=0.0, symmetric_factorisations=0)
+    """Newton's statistics at zero: its counts and the phase timings."""
+    return {"timings": defaultdict(float), **new_counts()}
 
 
 def _system(model, points, t0, t1):
