@@ -91,29 +91,58 @@ def test_make_bench_unsets_the_openblas_variables_before_numpy_loads():
 
 def test_plan_runs_only_efg_and_fem_p1p1_stab_on_cam_clay_from_large_from():
     runs = plan.plan([1_000, plan.LARGE_FROM, 1_000_000])
-    small = [run for run in runs if run[0] == 1_000]
-    assert len(small) == len(plan.METHODS) * len(plan.MATERIALS)
-    assert {run[3] for run in small} == {plan.direct()} and {run[4] for run in small} == {
-        plan.TIME_LIMIT}
-    large = [run for run in runs if run[0] >= plan.LARGE_FROM]
-    assert [run[:3] for run in large] == [
-        (n, "cam-clay", m) for n in (plan.LARGE_FROM, 1_000_000)
-        for m in ("efg", "fem-p1p1-stab")]
-    assert {run[3] for run in large} == {"krylov"}
-    assert {run[4] for run in large} == {plan.LARGE_TIME_LIMIT}
+    small = [run for run in runs if run.nodes == 1_000]
+    assert len(small) == (len(plan.METHODS) - 1 + len(plan.SCHEMES)) * len(plan.MATERIALS)
+    assert {run.solver for run in small} == {plan.direct()}
+    assert {run.limit for run in small} == {plan.TIME_LIMIT}
+    large = [run for run in runs if run.nodes >= plan.LARGE_FROM]
+    assert [run[:4] for run in large] == [
+        (n, "cam-clay", m, s) for n in (plan.LARGE_FROM, 1_000_000)
+        for m, s in [*(("efg", s) for s in plan.SCHEMES), ("fem-p1p1-stab", "-")]]
+    assert {run.solver for run in large} == {"krylov"}
+    assert {run.limit for run in large} == {plan.LARGE_TIME_LIMIT}
+
+
+def test_plan_runs_every_efg_run_once_per_scheme_and_fem_once():
+    runs = plan.plan([1_000, plan.BOTH_FROM, plan.KRYLOV_FROM])
+    efg = [run for run in runs if run.method == "efg"]
+    by_scheme = {scheme: [(r.nodes, r.material, r.solver, r.ready) for r in efg
+                          if r.integration == scheme] for scheme in plan.SCHEMES}
+    assert len(by_scheme["paper"]) > 0
+    assert all(runs_ == by_scheme["paper"] for runs_ in by_scheme.values())
+    assert {run.integration for run in runs if run.method != "efg"} == {"-"}
+    assert plan.plan([1_000], ("fem-th",)) == plan.plan([1_000], ("fem-th",), schemes=())
+
+
+def test_plan_skips_nodal_on_krylov_from_large_from_with_its_reason():
+    runs = plan.plan([plan.BOTH_FROM, plan.LARGE_FROM], ("efg",), ("cam-clay",))
+    skipped = [run for run in runs if run.skip]
+    assert [(run.nodes, run.integration, run.solver) for run in skipped] == [
+        (plan.LARGE_FROM, "nodal", "krylov")]
+    assert "krylov" in skipped[0].skip.lower() or "FGMRES" in skipped[0].skip
+
+
+def test_compression_sets_the_scheme_and_every_efg_setting_it_depends_on():
+    for scheme in plan.SCHEMES:
+        for krylov, conditions in ((False, ("penalty", "none")),
+                                   (True, ("nitsche", "perturbation"))):
+            efg = plan.compression(200, krylov=krylov, integration=scheme).efg
+            assert (efg.integration, efg.essential, efg.stabilisation) == (scheme,
+                                                                          *conditions)
 
 
 def test_plan_runs_the_large_methods_on_both_solvers_from_both_from():
-    runs = plan.plan([plan.BOTH_FROM])
-    krylov = [run[:3] for run in runs if run[3] == "krylov"]
+    runs = plan.plan([plan.BOTH_FROM], schemes=("paper",))
+    krylov = [run[:3] for run in runs if run.solver == "krylov"]
     assert krylov == [(plan.BOTH_FROM, material, m) for material in plan.MATERIALS
                       for m in plan.LARGE_METHODS]
-    ready = [run[:3] for run in runs if run[3] != "krylov" and run[5]]
+    ready = [run[:3] for run in runs if run.solver != "krylov" and run.ready]
     assert ready == ([(plan.BOTH_FROM, material, "efg") for material in plan.MATERIALS]
                      if plan.direct() == "pardiso" else [])   # single precision there
     assert len(runs) == len(plan.METHODS) * len(plan.MATERIALS) + len(krylov) + len(ready)
-    assert all(run[5] for run in runs if run[3] == "krylov")
-    assert not any(run[3] == "krylov" or run[5] for run in plan.plan([plan.BOTH_FROM - 1]))
+    assert all(run.ready for run in runs if run.solver == "krylov")
+    assert not any(run.solver == "krylov" or run.ready
+                   for run in plan.plan([plan.BOTH_FROM - 1]))
 
 
 def test_solver_and_limit_change_at_their_sizes(monkeypatch):
@@ -130,7 +159,7 @@ def test_steps_records_the_solver_per_row_and_an_unavailable_back_end(monkeypatc
     monkeypatch.setattr(plan, "KRYLOV_FROM", 300)
     lines = []
     table = runs.steps([200, 300], methods=("efg",), materials=("elastic",),
-                        progress=lines.append)
+                        progress=lines.append, schemes=("paper",))
     assert list(table.columns) == list(runs.COLUMNS) and len(lines) == 2
     small, large = table.iloc[0], table.iloc[1]
     assert small.status == "ok" and small.solver == plan.direct()
@@ -144,10 +173,59 @@ def test_steps_records_the_solver_per_row_and_an_unavailable_back_end(monkeypatc
         assert "krylov not available" in lines[1]
 
 
+def test_steps_runs_each_scheme_and_reads_its_points_and_tangent_entries(monkeypatch):
+    """A tiny run of each scheme beside fem-p1p1-stab; a skipped run is a row with its
+    reason and runs nothing."""
+    monkeypatch.setattr(plan, "SKIPS", {("efg", "nodal", plan.direct()): (300, "a reason")})
+    lines = []
+    table = runs.steps([200, 300], methods=("efg", "fem-p1p1-stab"), materials=("elastic",),
+                       progress=lines.append)
+    small = table[table.nodes < 250].set_index("integration")
+    assert list(small.index) == [*plan.SCHEMES, "-"] and (small.status == "ok").all()
+    assert (small.step > 0).all() and (small.assembly > 0).all()
+    assert small.loc["nodal", "points_per_node"] == 1.0       # the nodes themselves
+    # three Gauss points per triangle of the same initial Delaunay triangulation
+    assert small.loc["gauss", "points_per_node"] == small.loc["paper", "points_per_node"]
+    assert 4.0 < small.loc["paper", "points_per_node"] < 6.0
+    assert (small.entries_per_row > 9).all()                 # more than one node per row
+    assert (small.loc[list(plan.SCHEMES), "entries_per_row"]
+            > small.loc["-", "entries_per_row"]).all()       # MLS supports reach further
+    nodal = table[(table.nodes > 250) & (table.integration == "nodal")].iloc[0]
+    assert nodal.status == "skipped: a reason" and nodal.step != nodal.step
+    assert nodal.points_per_node != nodal.points_per_node    # not counted either
+    assert any("skipped: a reason" in line for line in lines)
+    against = analysis.schemes(table)
+    assert list(against.integration[against.nodes < 250]) == list(plan.SCHEMES)
+    assert against.fem_points_per_node.notna().all()
+    first = against.iloc[0]
+    assert first.step == pytest.approx(small.loc["paper", "step"] / small.loc["-", "step"])
+
+
+def test_counts_are_those_of_the_tangent_the_solver_builds():
+    """The EFG tangent stores the node pattern once per pair of its three fields."""
+    from soilwater.efg import solver
+    from soilwater.efg.discretisation import discretise
+    from soilwater.nonlinear.history import TIMERS
+
+    counted = runs.counts("efg", 200, "gauss")
+    case = plan.compression(200, integration="gauss")
+    model = solver.Model.build(case)
+    points = solver._initial_points(model)
+    disc = discretise(model, points.nodes, points.nodes, dict.fromkeys(TIMERS, 0.0),
+                      points.cells)
+    n = len(points.nodes)
+    assert counted["points_per_node"] == len(disc.w) / n
+    assert not model.scales.pin_pressure and not disc.bc.rigid.any()   # no border: 3n rows
+    assert counted["entries_per_row"] == pytest.approx(9 * disc.patterns["domain"].nnz
+                                                       / (3 * n))
+
+
 def _rows(*rows):
-    """A table of :func:`runs.steps` from (method, nodes, step, status, solver, peak_mb)."""
+    """A table of :func:`runs.steps` from (method, nodes, step, status, solver, peak_mb),
+    EFG with the paper's scheme."""
     return pd.DataFrame([
-        {"method": method, "material": "cam-clay", "nodes": nodes, "solver": solver,
+        {"method": method, "integration": "paper" if method == "efg" else "-",
+         "material": "cam-clay", "nodes": nodes, "solver": solver,
          "efg": "-" if method != "efg" else {"krylov": "nitsche, perturbation"}.get(
              solver, "penalty, none"),
          "status": status, "step": step if status == "ok" else np.nan,
@@ -204,7 +282,7 @@ def test_scale_growth_needs_both_ends_and_a_missing_size_is_not_measured():
                   ("efg", 300_675, 30.0, "ok", "krylov", 500.0))
     goals = analysis.scale_targets(table).set_index("target")
     growth = goals.loc["EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes "
-                       "(faster solver at each size)"]
+                       "(paper: faster solver at each size)"]
     assert growth.met == "not measured" and "only (fit 1.0" in growth["where"]
     assert goals.loc["EFG Cam-clay step at 1e6 nodes [s]"]["where"] == "no run at 1e6 nodes"
     assert goals.loc["EFG Cam-clay step at 1e6 nodes [s]"].met == "not measured"
@@ -230,7 +308,7 @@ def test_scale_targets_take_each_method_on_its_faster_solver():
     memory = goals[goals.target == "EFG Cam-clay peak memory at 1e5 nodes [GB]"]
     assert memory.met.tolist() == ["**no**", "yes"]
     growth = goals[goals.target.str.contains("growth")].set_index("target").measured
-    name = "EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes ({})"
+    name = "EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes (paper: {})"
     assert growth[name.format("faster solver at each size")] == pytest.approx(
         analysis.exponent([10_296, 100_010, 1_004_276], [1.0, 20.0, 200.0]))
     assert growth[name.format("krylov; nitsche, perturbation")] == pytest.approx(
@@ -238,7 +316,22 @@ def test_scale_targets_take_each_method_on_its_faster_solver():
     assert np.isnan(growth[name.format("pardiso; penalty, none")])
     ratios = goals[goals.target.str.contains("fem-p1p1-stab")]
     assert ratios.measured.tolist() == pytest.approx([2.0, 2.5])      # 1/0.5, 20/8
-    assert "efg krylov (nitsche, perturbation), fem-p1p1-stab krylov" in ratios["where"].iloc[1]
+    assert "efg paper krylov (nitsche, perturbation), fem-p1p1-stab krylov" in \
+        ratios["where"].iloc[1]
+
+
+def test_scale_targets_judge_each_scheme_on_its_own_runs():
+    table = _rows(("efg", 10_296, 1.0, "ok", "pardiso", 500.0),
+                  ("efg", 10_296, 3.0, "ok", "pardiso", 500.0),
+                  ("fem-p1p1-stab", 10_296, 1.0, "ok", "pardiso", 0))
+    table.loc[1, "integration"] = "nodal"
+    goals = analysis.scale_targets(table)
+    ratios = goals[goals.target.str.contains("fem-p1p1-stab")]
+    assert ratios.measured.tolist() == [1.0, 3.0] and ratios.met.tolist() == ["yes", "**no**"]
+    assert "efg nodal pardiso" in ratios["where"].iloc[1]
+    growth = goals[goals.target.str.contains("growth")].target.tolist()
+    assert any("(paper: " in name for name in growth)
+    assert any("(nodal: " in name for name in growth)
 
 
 def test_exponent_fits_only_the_range_asked_for():
@@ -262,8 +355,11 @@ def test_run_writes_both_target_tables_the_rates_and_the_figure(tmp_path, monkey
     monkeypatch.setattr(study, "SHAPES_UP_TO", 0)            # no shape functions
     table = study.run(str(tmp_path / "bench.md"), sizes=[200])
     assert (table.status == "ok").all() and set(table.method) == set(plan.METHODS)
+    assert list(table.integration[table.method == "efg"]) == list(plan.SCHEMES) * 2
+    assert table[list(runs.COUNTS)].notna().all().all()
     text = (tmp_path / "bench.md").read_text()
     for heading in ("## Targets at scale (EFG step, memory and growth to 10^6 nodes)",
+                    "## EFG schemes against fem-p1p1-stab at equal nodes",
                     "## Targets per phase (EFG against FEM)",
                     "## Factorisation rate against dgemm", "## Counts, memory and rates"):
         assert heading in text

@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 
 from soilwater.studies.bench.plan import MATERIALS, METHODS
-from soilwater.studies.bench.runs import PHASES
+from soilwater.studies.bench.runs import COUNTS, PHASES
 from soilwater.studies.harness.machine import ram_gb
 
 def exponent(nodes, seconds, within=None):
@@ -57,14 +57,16 @@ def verdict(measured, limit):
                     np.where(measured <= limit, "yes", "**no**"))
 
 
-def pick(table, method, material, nodes, solver=None):
+def pick(table, method, material, nodes, solver=None, integration=None):
     """The row of ``method`` and ``material`` at the size ``nodes`` asked for (its grid's
-    count within 10 %), on ``solver`` (None: the first such run), or None if there was
-    no such run."""
+    count within 10 %), on ``solver`` and with EFG's scheme ``integration`` (None: the
+    first such run), or None if there was no such run."""
     rows = table[(table.method == method) & (table.material == material)
                  & np.isclose(table.nodes, nodes, rtol=0.1)]
     if solver is not None:
         rows = rows[rows.solver == solver]
+    if integration is not None:
+        rows = rows[rows.integration == integration]
     return rows.iloc[0] if len(rows) else None
 
 
@@ -93,39 +95,71 @@ def at(x, xs, ys):
     return float(np.exp(np.interp(np.log(x), np.log(xs), np.log(ys))))
 
 
-def ratios(table):
-    """EFG / FEM per phase at equal nodes (same grid) on the same linear solver, for each
-    material, size, solver and EFG's conditions (``efg``)."""
-    rows = []
-    for (material, nodes, solver), group in table.groupby(["material", "nodes", "solver"],
-                                                          sort=False):
+def pairs(table, against=METHODS[1:]):
+    """Every EFG row with each FEM run of ``against`` at equal nodes (same grid), the same
+    material and the same linear solver (the first such run of each method): ``(efg,
+    fem)`` rows, in the table's order."""
+    for _, group in table.groupby(["material", "nodes", "solver"], sort=False):
         by = group.drop_duplicates("method").set_index("method")
         for _, efg in group[group.method == "efg"].iterrows():
-            for fem in METHODS[1:]:
-                if fem not in by.index:
-                    continue
-                row = {"material": material, "nodes": nodes, "solver": solver,
-                       "efg": efg["efg"], "against": fem}
-                for phase in PHASES:
-                    row[phase] = efg[phase] / by.loc[fem, phase]
-                rows.append(row)
-    return pd.DataFrame(rows)
+            yield from ((efg, by.loc[fem]) for fem in against if fem in by.index)
+
+
+def ratios(table):
+    """EFG / FEM per phase, and per count of :data:`~soilwater.studies.bench.runs.COUNTS`,
+    at equal nodes (same grid) on the same linear solver, for each material, size,
+    solver, EFG scheme (``integration``) and EFG's conditions (``efg``)."""
+    rows = [{"material": efg.material, "nodes": efg.nodes, "solver": efg.solver,
+             "integration": efg.integration, "efg": efg["efg"], "against": fem.name,
+             **{column: efg[column] / fem[column] for column in (*COUNTS, *PHASES)}}
+            for efg, fem in pairs(table)]
+    return pd.DataFrame(rows, columns=["material", "nodes", "solver", "integration", "efg",
+                                       "against", *COUNTS, *PHASES])
+
+
+#: The FEM pair each EFG scheme is measured against in :func:`schemes`.
+AGAINST = "fem-p1p1-stab"
+
+
+def schemes(table):
+    """Each EFG scheme against :data:`AGAINST` at equal nodes, same material and linear
+    solver: the size of both discretisations and EFG / FEM per phase.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Per EFG row: material, nodes, solver, ``integration``, ``efg`` (conditions),
+        ``status``, EFG's ``points_per_node`` and ``entries_per_row``
+        (:func:`~soilwater.studies.bench.runs.counts`), the same of :data:`AGAINST`
+        (``fem_points_per_node``, ``fem_entries_per_row``), EFG's ``step_s`` [s] and
+        EFG / FEM per phase (NaN where either run did not complete).
+    """
+    rows = [{"material": efg.material, "nodes": efg.nodes, "solver": efg.solver,
+             "integration": efg.integration, "efg": efg["efg"], "status": efg.status,
+             **{column: efg[column] for column in COUNTS},
+             **{f"fem_{column}": fem[column] for column in COUNTS}, "step_s": efg.step,
+             **{phase: efg[phase] / fem[phase] for phase in PHASES}}
+            for efg, fem in pairs(table, (AGAINST,))]
+    return pd.DataFrame(rows, columns=["material", "nodes", "solver", "integration", "efg",
+                                       "status", *COUNTS,
+                                       *(f"fem_{column}" for column in COUNTS), "step_s",
+                                       *PHASES])
 
 
 def exponents(table):
-    """Growth exponent of every phase, per method, material and linear solver, fitted on
-    the runs that completed (``from`` and ``to``: the node counts of the fit)."""
+    """Growth exponent of every phase, per method, EFG scheme, material and linear
+    solver, fitted on the runs that completed (``from`` and ``to``: the node counts of the
+    fit)."""
     rows = []
     ok = table[table.status == "ok"]
-    for (method, material, solver, efg), group in ok.groupby(
-            ["method", "material", "solver", "efg"], sort=False):
-        row = {"method": method, "material": material, "solver": solver, "efg": efg,
-               "from": group.nodes.min(), "to": group.nodes.max()}
+    keys = ["method", "integration", "material", "solver", "efg"]
+    for values, group in ok.groupby(keys, sort=False):
+        row = {**dict(zip(keys, values, strict=True)), "from": group.nodes.min(),
+               "to": group.nodes.max()}
         for phase in PHASES:
             row[phase] = exponent(group.nodes, group[phase])
         rows.append(row)
-    return pd.DataFrame(rows, columns=["method", "material", "solver", "efg", "from", "to",
-                                       *PHASES])
+    return pd.DataFrame(rows, columns=[*keys, "from", "to", *PHASES])
 
 
 def rates(table, yardstick):
@@ -141,14 +175,15 @@ def rates(table, yardstick):
     Returns
     -------
     pandas.DataFrame
-        Method, material, nodes, solver, EFG's conditions, ``single_factorisations``,
-        ``factor_flops``, ``solve`` [s], ``factor_gflops_lb`` [GF/s] and its fractions of
-        MKL's and NumPy's dgemm rates (a single-precision factorisation's rate is
-        compared with double's dgemm too, so its fraction overstates).
+        Method, EFG's scheme, material, nodes, solver, EFG's conditions,
+        ``single_factorisations``, ``factor_flops``, ``solve`` [s], ``factor_gflops_lb``
+        [GF/s] and its fractions of MKL's and NumPy's dgemm rates (a single-precision
+        factorisation's rate is compared with double's dgemm too, so its fraction
+        overstates).
     """
     done = table[table.factor_flops.notna() & (table.status == "ok")]
-    return done[["method", "material", "nodes", "solver", "efg", "single_factorisations",
-                 "factor_flops", "solve", "factor_gflops_lb"]].assign(
+    return done[["method", "integration", "material", "nodes", "solver", "efg",
+                 "single_factorisations", "factor_flops", "solve", "factor_gflops_lb"]].assign(
         of_mkl_dgemm=done.factor_gflops_lb / yardstick["mkl_gflops"],
         of_numpy_dgemm=done.factor_gflops_lb / yardstick["numpy_gflops"])
 
@@ -158,8 +193,8 @@ def phase_targets(table, shapes, growth):
     one row each.
 
     A "whole step / fem-p1p1" row whose fem-p1p1 run was stopped compares with its time
-    limit: an upper bound of the ratio; EFG is taken on fem-p1p1's solver. Assembly per
-    tangent and growth exponents are of the direct solver's runs.
+    limit: an upper bound of the ratio; EFG is taken on fem-p1p1's solver, once per
+    scheme. Assembly per tangent and growth exponents are of the direct solver's runs.
     """
     rows = []
     ok = table[table.status == "ok"]
@@ -177,23 +212,28 @@ def phase_targets(table, shapes, growth):
             fem = at(row.dofs, th.dofs, th.assembly / th.factorisations) if len(th) else np.nan
             if fem == fem:
                 rows.append((f"assembly per tangent / fem-th at equal DOFs ({material})",
-                             f"{row.nodes} nodes, {int(row.dofs)} DOFs; {row.efg}",
+                             f"{row.nodes} nodes, {int(row.dofs)} DOFs; "
+                             f"{row.integration}; {row.efg}",
                              row.assembly / row.factorisations / fem, 2.0))
         for nodes in (10_000, 100_000):
             f = pick(table, "fem-p1p1", material, nodes)
-            e = None if f is None else pick(table, "efg", material, nodes, f.solver)
-            if e is not None:
+            for scheme in dict.fromkeys(table.integration[table.method == "efg"]):
+                e = None if f is None else pick(table, "efg", material, nodes, f.solver,
+                                                scheme)
+                if e is None:
+                    continue
                 stopped = f.status.startswith("stopped")
                 rows.append((f"whole step / fem-p1p1 at equal nodes ({material})",
-                             f"{e.nodes} nodes" + (f" (fem-p1p1 {f.status}: an upper bound)"
-                                                   if stopped else ""),
+                             f"{e.nodes} nodes, {scheme}"
+                             + (f" (fem-p1p1 {f.status}: an upper bound)" if stopped else ""),
                              e.step / (f.limit_s if stopped else f.step), 3.0))
     direct = growth[(growth.method == "efg") & (growth.solver != "krylov")]
     for _, row in direct.iterrows():
         for phase in PHASES:
             if phase != "solve":
                 rows.append((f"growth exponent, EFG {phase} ({row.material})",
-                             f"{row['from']} to {row['to']} nodes, {row.solver}; {row.efg}",
+                             f"{row['from']} to {row['to']} nodes, {row.solver}; "
+                             f"{row.integration}; {row.efg}",
                              row[phase], 1.2))
     frame = pd.DataFrame(rows, columns=["target", "where", "measured", "limit"])
     frame["met"] = verdict(frame.measured, frame.limit)
@@ -213,10 +253,11 @@ def scale_targets(table, machine_name="this machine"):
     row each.
 
     A target whose run did not complete is "not measured" (:func:`verdict`), with the
-    run's status, and where it bounds the value, the bound, in ``where``. The 10^5-node
-    step and memory are given per solver that ran there; the growth exponent on the
-    faster solver at each size (:func:`fastest`) and per solver; EFG and fem-p1p1-stab
-    are compared at equal nodes, each on its faster solver there.
+    run's status, and where it bounds the value, the bound, in ``where``. Each EFG
+    scheme (``integration``) is judged on its own runs. The 10^5-node step and memory
+    are given per run there; the growth exponent per scheme on the faster solver at each
+    size (:func:`fastest`) and per solver; each scheme and fem-p1p1-stab are compared at
+    equal nodes, each on its faster solver there.
 
     Parameters
     ----------
@@ -237,7 +278,8 @@ def scale_targets(table, machine_name="this machine"):
         for _, row in there.iterrows():
             done, peak = row.status == "ok", row.get("peak_mb", np.nan)
             until = f" (peak {peak / 1e3:.2f} GB until then)" if peak == peak else ""
-            rows.append((what, f"{row.nodes} nodes, {row.solver}; {row.efg}"
+            rows.append((what, f"{row.nodes} nodes, {row.solver}; {row.integration}; "
+                         f"{row.efg}"
                          + ("" if done else f", {row.status}{until}") + note,
                          row[column] * scale if done else np.nan, limit))
 
@@ -249,23 +291,25 @@ def scale_targets(table, machine_name="this machine"):
     at_size(1_000_000, "peak_mb", 1e-3, "EFG Cam-clay peak memory at 1e6 nodes [GB]",
             MACHINE_GB, f"; limit 24 GiB; this machine has {ram_gb():.1f} GB")
 
-    faster = pd.DataFrame([fastest(group) for _, group in efg.groupby("nodes")],
-                          columns=efg.columns)
-    series = {"faster solver at each size": faster,
-              **{f"{solver}; {conditions}": runs for (solver, conditions), runs
-                 in efg.groupby(["solver", "efg"], sort=False)}}
-    for name, runs in series.items():
-        rows.append((f"EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes ({name})",
-                     *_growth(runs), 1.15))
+    for scheme, scheme_runs in efg.groupby("integration", sort=False):
+        faster = pd.DataFrame([fastest(group) for _, group in scheme_runs.groupby("nodes")],
+                              columns=efg.columns)
+        series = {"faster solver at each size": faster,
+                  **{f"{solver}; {conditions}": runs for (solver, conditions), runs
+                     in scheme_runs.groupby(["solver", "efg"], sort=False)}}
+        for name, runs in series.items():
+            rows.append((f"EFG Cam-clay step growth exponent, 1e4 to 1e6 nodes ({scheme}: "
+                         f"{name})", *_growth(runs), 1.15))
 
     stab = table[table.method == "fem-p1p1-stab"]
-    for (material, nodes), group in table[table.method == "efg"].groupby(
-            ["material", "nodes"], sort=False):
+    for (material, nodes, scheme), group in table[table.method == "efg"].groupby(
+            ["material", "nodes", "integration"], sort=False):
         e = fastest(group)
         f = fastest(stab[(stab.material == material) & (stab.nodes == nodes)])
         if f is None:
             continue
-        where = f"{nodes} nodes, efg {e.solver} ({e.efg}), fem-p1p1-stab {f.solver}"
+        where = (f"{nodes} nodes, efg {scheme} {e.solver} ({e.efg}), fem-p1p1-stab "
+                 f"{f.solver}")
         if e.status == "ok" and f.status == "ok":
             ratio = e.step / f.step
         else:

@@ -5,15 +5,17 @@ within 10 %). Every run is one step of the unconfined-compression geometry
 (:func:`compression`). From :data:`LARGE_FROM` nodes only :data:`LARGE_METHODS` with
 :data:`LARGE_MATERIALS` run; the linear solver is the direct one (:func:`direct`) below
 :data:`KRYLOV_FROM` nodes and ``"krylov"`` from there, and from :data:`BOTH_FROM` nodes
-:data:`LARGE_METHODS` run on both (:func:`plan`). A run is stopped after
-:func:`time_limit` seconds.
+:data:`LARGE_METHODS` run on both (:func:`plan`). EFG runs once per integration scheme
+(:data:`SCHEMES`) wherever it runs. A run is stopped after :func:`time_limit` seconds.
 """
 
 import dataclasses
+from typing import NamedTuple
 
 import numpy as np
 
 from soilwater.case.loader import load_case
+from soilwater.efg.settings import INTEGRATIONS
 from soilwater.errors import InputError
 from soilwater.linalg import backends as linear
 from soilwater.linalg.backends import available, linear_solver
@@ -24,6 +26,8 @@ SIZES = (1_000, 3_000, 10_000, 30_000, 100_000, 300_000, 1_000_000)
 MIN_SIZE = 100
 METHODS = ("efg", "fem-p1p1", "fem-th", "fem-p1p1-stab")
 MATERIALS = ("cam-clay", "elastic")
+#: EFG's integration schemes (``efg.integration``): every EFG run is made once per scheme.
+SCHEMES = INTEGRATIONS
 #: From this many (requested) nodes only :data:`LARGE_METHODS` with
 #: :data:`LARGE_MATERIALS` run, under :data:`LARGE_TIME_LIMIT`: EFG against the stabilised
 #: P1-P1 at 10^6 nodes, within the run time of :mod:`soilwater.studies.bench.study`.
@@ -76,7 +80,7 @@ def parse_sizes(text):
     return sizes
 
 
-def compression(nodes, material="cam-clay", krylov=False):
+def compression(nodes, material="cam-clay", krylov=False, integration="paper"):
     """The benchmark case: unconfined compression on a grid of about ``nodes`` nodes.
 
     Parameters
@@ -89,7 +93,10 @@ def compression(nodes, material="cam-clay", krylov=False):
         EFG as the Krylov back-end needs it: Nitsche's essential conditions (a penalty's
         diagonal spans 1e6, so a small residual says nothing of the error) and the
         perturbation stabilisation (the case is undrained: without it the pressure Schur
-        complement of equal-order MLS is near singular and FGMRES stalls).
+        complement of equal-order MLS is near singular and FGMRES stalls); else penalty
+        conditions and no stabilisation. Both are set explicitly, not left to defaults.
+    integration : str
+        EFG's ``efg.integration`` (:data:`SCHEMES`).
 
     Examples
     --------
@@ -100,8 +107,9 @@ def compression(nodes, material="cam-clay", krylov=False):
     case = load_case("unconfined-compression", [
         f"discretisation.nx={3 * k + 1}", f"discretisation.ny={4 * k + 1}",
         "discretisation.layout=grid", "time.steps=1", "time.end=0.2",
+        f'efg.integration="{integration}"',
         *(['efg.essential="nitsche"', 'efg.stabilisation="perturbation"'] if krylov
-          else [])])
+          else ['efg.essential="penalty"', 'efg.stabilisation="none"'])])
     if material == "elastic":
         case = dataclasses.replace(case, material_spec=ELASTIC)
     return case
@@ -146,22 +154,72 @@ def usable(solver):
         return False
 
 
-def plan(sizes=SIZES, methods=METHODS, materials=MATERIALS):
-    """The runs of :func:`~soilwater.studies.bench.runs.steps`: ``(nodes, material,
-    method, solver, limit, ready)`` per run, sizes in the given order.
+#: Runs the plan skips: ``(method, scheme, solver)``: the (requested) node count from which
+#: it is skipped and why (the report shows the reason in the run's row). Nodal
+#: integration on Krylov, one step on 2 shared cores: 348 FGMRES iterations at 10^4 nodes
+#: (paper and gauss 61), 504 at 3 x 10^4 (gauss 63), and at 10^5 no end after 890 s
+#: where paper's step took 154 s (``docs/studies/speed.rst``).
+SKIPS = {("efg", "nodal", "krylov"): (
+    LARGE_FROM, "FGMRES iterations grow with size under nodal integration (504 against 63 "
+    "at 3e4 nodes): a step would pass the time limit")}
+
+
+def skipped(method, integration, solver, nodes):
+    """Why the plan skips a run of ``method`` with EFG's scheme ``integration`` on
+    ``solver`` at ``nodes`` requested nodes (:data:`SKIPS`), "" if it runs it.
+
+    Examples
+    --------
+    >>> skipped("efg", "nodal", "krylov", LARGE_FROM) != ""
+    True
+    >>> skipped("efg", "nodal", "krylov", LARGE_FROM - 1), skipped("efg", "gauss", "krylov", 10**6)
+    ('', '')
+    """
+    start, reason = SKIPS.get((method, integration, solver), (np.inf, ""))
+    return reason if nodes >= start else ""
+
+
+class Run(NamedTuple):
+    """One run of :func:`plan`: one step of :func:`compression`.
+
+    ``nodes`` is the requested node count; ``integration`` EFG's scheme ("-" for FEM);
+    ``limit`` the seconds after which it is stopped; ``ready`` EFG as the Krylov back-end
+    needs it (:func:`compression`'s ``krylov``); ``skip`` why it is not run, "" if it is.
+    """
+
+    nodes: int
+    material: str
+    method: str
+    integration: str
+    solver: str
+    limit: float
+    ready: bool
+    skip: str = ""
+
+    @property
+    def scheme(self):
+        """``efg.integration`` of the run's case: its scheme; for FEM, which reads no EFG
+        setting, the paper's."""
+        return "paper" if self.integration == "-" else self.integration
+
+
+def plan(sizes=SIZES, methods=METHODS, materials=MATERIALS, schemes=SCHEMES):
+    """The runs of :func:`~soilwater.studies.bench.runs.steps`, a :class:`Run` each, sizes
+    in the given order.
 
     From :data:`LARGE_FROM` nodes only :data:`LARGE_METHODS` with :data:`LARGE_MATERIALS`;
     from :data:`BOTH_FROM` to :data:`KRYLOV_FROM` :data:`LARGE_METHODS` run on the direct
     back-end and then on ``"krylov"``, and on PARDISO EFG runs a second time as the Krylov
     back-end needs it (``ready``, :func:`compression`'s ``krylov``), where PARDISO
     factorises it in single precision (:attr:`soilwater.linalg.layout.Layout.single`).
-    ``ready`` is True for every Krylov run.
+    ``ready`` is True for every Krylov run. Every EFG run is made once per scheme of
+    ``schemes``, in that order; a run :func:`skipped` gives is planned with its reason.
 
     Examples
     --------
-    >>> [run[:4] for run in plan([1_000_000], ("efg", "fem-th"))]
-    [(1000000, 'cam-clay', 'efg', 'krylov')]
-    >>> [run[3] for run in plan([BOTH_FROM], ("efg",), ("elastic",))][-1:]
+    >>> [run[:5] for run in plan([1_000_000], ("efg", "fem-th"), schemes=("gauss",))]
+    [(1000000, 'cam-clay', 'efg', 'gauss', 'krylov')]
+    >>> [run.solver for run in plan([BOTH_FROM], ("efg",), ("elastic",), ("paper",))][-1:]
     ['krylov']
     """
     runs = []
@@ -177,6 +235,8 @@ def plan(sizes=SIZES, methods=METHODS, materials=MATERIALS):
                     if method == "efg" and direct() == "pardiso":
                         solvers.append(("pardiso", True))
                     solvers.append(("krylov", True))
-                runs += [(nodes, material, method, solver, time_limit(nodes), ready)
+                runs += [Run(nodes, material, method, scheme, solver, time_limit(nodes), ready,
+                             skipped(method, scheme, solver, nodes))
+                         for scheme in (schemes if method == "efg" else ("-",))
                          for solver, ready in solvers]
     return runs

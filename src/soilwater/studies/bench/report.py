@@ -11,11 +11,11 @@ import time
 import numpy as np
 import skfem
 
-from soilwater.studies.bench.analysis import rates, ratios
+from soilwater.studies.bench.analysis import AGAINST, rates, ratios, schemes
 from soilwater.studies.bench.plan import (BOTH_FROM, KRYLOV_FROM, LARGE_FROM, LARGE_MATERIALS,
-                                          LARGE_METHODS, LARGE_TIME_LIMIT, METHODS,
+                                          LARGE_METHODS, LARGE_TIME_LIMIT, METHODS, SCHEMES,
                                           TIME_LIMIT, direct)
-from soilwater.studies.bench.runs import PHASES
+from soilwater.studies.bench.runs import COUNTS, PHASES
 from soilwater.studies.harness.machine import cpu, ram_gb
 
 
@@ -32,11 +32,12 @@ def machine():
 
 
 def figure(table, path):
-    """Log-log time against nodes, one panel per phase: Cam-clay solid with circles,
-    elastic dashed with squares; a line per solver, filled markers on the direct one, open
-    ones on the iterative one (``krylov``); in the step panel, a run stopped at its time
-    limit is a triangle at that limit (its time is longer). Runs that died or did not run are not
-    drawn (the tables list them)."""
+    """Log-log time against nodes, one panel per phase: a colour per FEM method and per
+    EFG scheme; Cam-clay solid with circles, elastic dashed with squares (diamonds for EFG
+    with Nitsche's conditions and the perturbation); a line per solver, filled markers on
+    the direct one, open ones on the iterative one (``krylov``); in the step panel, a run
+    stopped at its time limit is a triangle at that limit (its time is longer). Runs that
+    died or did not run are not drawn (the tables list them)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -44,25 +45,29 @@ def figure(table, path):
     from matplotlib.lines import Line2D
 
     fig, axes = plt.subplots(2, 3, figsize=(12, 7), sharex=True, constrained_layout=True)
-    colours = dict(zip(METHODS, ("C0", "C1", "C2", "C3"), strict=True))
-    ok = table[table.status == "ok"]
+    colours = dict(zip([*METHODS[1:], *(f"efg {scheme}" for scheme in SCHEMES)],
+                       ("C1", "C2", "C3", "C0", "C4", "C5"), strict=True))
+    named = table.assign(curve=np.where(table.method == "efg",
+                                        "efg " + table.integration, table.method))
+    ok = named[named.status == "ok"]
     for ax, phase in zip(axes.ravel(), PHASES, strict=True):
-        for (method, material, efg), group in ok.groupby(["method", "material", "efg"],
-                                                         sort=False):
+        for (curve, material, efg), group in ok.groupby(["curve", "material", "efg"],
+                                                        sort=False):
             if not group[phase].notna().any():
                 continue
-            colour = "C4" if efg.startswith("nitsche") else colours[method]
-            marker = "o" if material == "cam-clay" else "s"
-            label = f"{method}, {material}" + (f" ({efg})" if efg != "-" else "")
+            colour = colours[curve]
+            marker = ("D" if efg.startswith("nitsche") else "o") if material == "cam-clay" \
+                else ("d" if efg.startswith("nitsche") else "s")
+            label = f"{curve}, {material}" + (f" ({efg})" if efg != "-" else "")
             for krylov, part in group.groupby(group.solver == "krylov"):
                 ax.loglog(part.nodes, part[phase], ("-" if material == "cam-clay" else "--")
                           + marker, color=colour, ms=4, mfc="none" if krylov else colour,
                           label=label)
                 label = None
         if phase == "step":
-            stopped = table[table.status.str.startswith("stopped")]
-            for method, group in stopped.groupby("method"):
-                ax.loglog(group.nodes, group.limit_s, "^", color=colours[method], ms=7,
+            stopped = named[named.status.str.startswith("stopped")]
+            for curve, group in stopped.groupby("curve"):
+                ax.loglog(group.nodes, group.limit_s, "^", color=colours[curve], ms=7,
                           mfc="none")
         reference = ok[ok.method == "efg"][phase].min()
         if reference == reference:
@@ -111,7 +116,7 @@ def write(path, table, shapes, growth, phases, scale, yardstick, tic):
     table.to_csv(os.path.join(root, "tables", "bench.csv"), index=False)
     figure(table, os.path.join(root, "figures", "bench.png"))
     largest = table[table.nodes == table.nodes.max()]
-    memory = ", ".join(f"{r.method} {r.material} "
+    memory = ", ".join(f"{r.method} {r.integration} {r.material} "
                        + (f"{r.peak_mb:.0f} MB ({r.kb_per_node:.0f} kB/node)"
                           if r.status == "ok" else r.status)
                        for r in largest.itertuples())
@@ -124,6 +129,8 @@ def write(path, table, shapes, growth, phases, scale, yardstick, tic):
         f"Measured in one run of {seconds:.0f} s on {machine()}. "
         "One step of the unconfined-compression geometry (grid layout, 0.2 % axial "
         "strain) per method, material and size, each in its own forked process. "
+        f"EFG runs once per integration scheme ({', '.join(SCHEMES)}; the "
+        "`integration` column, - for FEM) wherever it runs. "
         f"From {LARGE_FROM} nodes only {' and '.join(LARGE_METHODS)} run, with "
         f"{' and '.join(LARGE_MATERIALS)}. The linear solver is chosen by size: "
         f"{direct()} below {KRYLOV_FROM} nodes, the iterative back-end (krylov) from "
@@ -140,7 +147,12 @@ def write(path, table, shapes, growth, phases, scale, yardstick, tic):
         "solver does in it (shape functions or bases, cells, every Newton iteration). "
         "EFG assembly includes building the sparse pattern of the step. Memory is the "
         "whole process's peak resident set [MB = 10^6 bytes; kB = 10^3 bytes per node], "
-        "the interpreter and libraries included.", "",
+        "the interpreter and libraries included. `points_per_node` is the domain's "
+        "integration points (the material points) per node of the grid and "
+        "`entries_per_row` the stored entries of the step's first Newton tangent per row "
+        "(nnz over the unknowns the linear solver gets), both read off the solver's own "
+        "step objects in a child of their own, once per size, method and scheme. A run "
+        "the plan skips is a row whose status says why.", "",
         "## Targets at scale (EFG step, memory and growth to 10^6 nodes)", "",
         "A target whose run did not complete is \"not measured\"; `where` gives the "
         "run's status and, when it bounds the value, the bound.", "",
@@ -161,15 +173,20 @@ def write(path, table, shapes, growth, phases, scale, yardstick, tic):
         "No run reported `factor_flops` (`result.summary` has no count from its linear "
         "back-end): the factorisation rate is not measured.\n",
         "## Targets per phase (EFG against FEM)", "", to_markdown(phases, "{:.3g}"),
+        f"## EFG schemes against {AGAINST} at equal nodes", "",
+        f"Per EFG run: its scheme's size ({', '.join(COUNTS)}; `fem_...` the same of "
+        f"{AGAINST}), its step [s] and EFG / {AGAINST} per phase, on the same grid, "
+        "material and linear solver (- where either run did not complete).", "",
+        to_markdown(schemes(table), "{:.3g}"),
         "## Phase times [s]", "",
-        to_markdown(table[["method", "material", "nodes", "solver", "efg", "status",
-                           *PHASES]], "{:.3g}"),
+        to_markdown(table[["method", "integration", "material", "nodes", "solver", "efg",
+                           "status", *COUNTS, *PHASES]], "{:.3g}"),
         "## Counts, memory and rates", "",
         "Newton `iterations` summed over the step, `linear_iterations` the Krylov "
         "iterations (- where the back-end reports none), `factor_flops` as above, "
         "`limit_s` the run's time limit [s].", "",
-        to_markdown(table[["method", "material", "nodes", "solver", "efg", "dofs",
-                           "iterations",
+        to_markdown(table[["method", "integration", "material", "nodes", "solver", "efg",
+                           "dofs", "iterations",
                            "linear_iterations", "factorisations",
                            "symmetric_factorisations", "single_factorisations",
                            "perturbed_pivots", "factor_flops",

@@ -12,13 +12,17 @@ Three measurements, all on this machine in one command (never timed tests):
    step of 0.2 % axial strain) at about 10^3, 3 x 10^3, ..., 10^6 nodes
    (:data:`~soilwater.studies.bench.plan.SIZES`) for ``efg``, ``fem-p1p1``, ``fem-th``
    and ``fem-p1p1-stab`` on the same vertices, with the Cam-clay skeleton of the case and
-   with a linear elastic one. The rule that bounds the whole run (28 minutes on 2 cores,
-   the four large runs at most 4 x 900 s of it): from 3 x 10^5 nodes
+   with a linear elastic one, EFG once per integration scheme (``efg.integration`` =
+   paper, gauss, nodal: :data:`~soilwater.studies.bench.plan.SCHEMES`) wherever it runs.
+   The rule that bounds the whole run: from 3 x 10^5 nodes
    (:data:`~soilwater.studies.bench.plan.LARGE_FROM`) only ``efg`` and ``fem-p1p1-stab``
    with Cam-clay run, and a run is stopped after 900 s there, 240 s below
-   (:func:`~soilwater.studies.bench.plan.time_limit`). The linear solver is chosen by size
-   (:func:`~soilwater.studies.bench.plan.solver_for`): the direct one, PARDISO where
-   ``pypardiso`` is installed, else SuperLU, below 3 x 10^5 nodes
+   (:func:`~soilwater.studies.bench.plan.time_limit`); there ``nodal`` is skipped
+   (:data:`~soilwater.studies.bench.plan.SKIPS`), so the large runs take at most
+   6 x 900 s (4 x 900 s, and 28 minutes in all on 2 cores, before the schemes). The
+   linear solver is chosen by size (:func:`~soilwater.studies.bench.plan.solver_for`):
+   the direct one, PARDISO where ``pypardiso`` is installed, else SuperLU, below
+   3 x 10^5 nodes
    (:data:`~soilwater.studies.bench.plan.KRYLOV_FROM`), and
    ``soilwater.linalg.backends.linear_solver("krylov")`` from there, where EFG runs with
    Nitsche's conditions and the perturbation stabilisation, as the Krylov back-end needs
@@ -34,18 +38,23 @@ Three measurements, all on this machine in one command (never timed tests):
    solve (analysis, factorisations and back-substitutions), constitutive update, and the
    whole step; each row adds the solver, Newton and Krylov iterations, the flops of the
    factorisations and their rate (a lower bound: flops / solve time), and peak memory per
-   node. Each run is a forked child process, so its peak resident memory is its own; a
-   run stopped, killed (out of memory) or failed, or whose solver is not available here,
-   is a row with its status.
+   node, and the size of the step's discretisation: integration points per node and
+   stored entries per row of its first Newton tangent
+   (:func:`~soilwater.studies.bench.runs.counts`). Each EFG scheme is set against
+   ``fem-p1p1-stab`` at equal nodes (:func:`~soilwater.studies.bench.analysis.schemes`).
+   Each run is a forked child process, so its peak resident memory is its own; a run
+   stopped, killed (out of memory) or failed, or whose solver is not available here, is a
+   row with its status, and so is a run the plan skips, with the plan's reason.
 3. **Shape functions alone** up to 10^5 nodes: MLS values and gradients against
    scikit-fem's ``CellBasis`` construction (P1 and P2) at the same quadrature points
    (3 per triangle of the Delaunay triangulation of the nodes).
 
 Writes ``reports/bench.md`` (the targets at scale and per phase, factorisation rate
-against dgemm, ratios, growth exponents, memory), ``reports/tables/bench.csv`` (every run)
-and ``reports/figures/bench.png``. The jobs have their own modules:
-:mod:`~soilwater.studies.bench.plan` (which runs), :mod:`~soilwater.studies.bench.runs`
-(the forked steps and shape functions), :mod:`soilwater.studies.harness.machine` (dgemm
+against dgemm, the schemes against fem-p1p1-stab, ratios, growth exponents, memory),
+``reports/tables/bench.csv`` (every run) and ``reports/figures/bench.png``. The jobs have
+their own modules: :mod:`~soilwater.studies.bench.plan` (which runs),
+:mod:`~soilwater.studies.bench.runs` (the forked steps, the discretisations' sizes and
+shape functions), :mod:`soilwater.studies.harness.machine` (dgemm
 and the machine), :mod:`~soilwater.studies.bench.analysis` (ratios, exponents, targets)
 and :mod:`~soilwater.studies.bench.report` (Markdown, CSV, figure).
 """
