@@ -224,6 +224,28 @@ def test_integration_schemes_steps():
                                 "--first", "1", "--schemes", "nodal"])
 
 
+def test_locking_runs_every_table():
+    out = script("locking").main([
+        "--steps", "2", "--core", "2", "--cores", "2", "--fem-cores", "2",
+        "--variant-cores", "2", "--fine-core", "2", "--factors", "4", "--pairs", "1.6,1.6",
+        "--fine-runs", "nodal,efg.scale_u=2.0"])
+    assert {t: len(rows) for t, rows in out.items()} == {
+        "sizes": 3 + 2, "variants": 4 * (2 + 2), "stabilisations": 3 + 2, "supports": 2,
+        "fine": 1}
+    rows = [row for table in out.values() for row in table]
+    for row in rows:
+        assert row["reached"] and row["failed"] is None, row
+        assert row["nodes"] == row["p"] == 100 and counts(row["u"]), row
+        assert positive(row["seconds"]) and positive(row["pressure"]), row
+        assert row["pw_min"] <= row["pw_max"], row
+        assert math.isfinite(row["wiggle"]) and row["wiggle"] >= 0, row
+    for row in out["variants"]:
+        assert positive(row["ratio"]), row
+        if row["variant"] in ("drained", "elastic-drained"):   # dissipated within a step
+            assert max(-row["pw_min"], row["pw_max"]) < 1e-3, row
+    assert [row["ratio"] for row in out["variants"] if row["method"] == "fem-th"] == [1.0] * 4
+
+
 def test_bad_input_is_one_line(capsys):
     with pytest.raises(SystemExit) as stopped:
         script("krylov_runs").main(["--set", "time.steps=-1"])
