@@ -39,6 +39,9 @@ class Quadrature(NamedTuple):
     triangles : ndarray of int, shape (C, 3), or None
         Node indices of the Delaunay triangles (``cells == nodes[triangles]``); None for
         square cells.
+    rebuilds : tuple of dict
+        The records of the rebuilds of Lagrangian cells these cells descend from, oldest
+        first (:func:`soilwater.efg.rebuild.record`; ``efg.integration = "gauss"``).
     """
 
     points: np.ndarray
@@ -46,6 +49,7 @@ class Quadrature(NamedTuple):
     cells: np.ndarray
     cell: np.ndarray
     triangles: np.ndarray | None = None
+    rebuilds: tuple = ()
 
 
 def background(case, nodes, loop, settings):
@@ -169,7 +173,8 @@ def delaunay_cells(nodes, boundary, order=2):
 def lagrangian_cells(nodes, triangles, order=2):
     """Fixed triangles of nodes, at the nodes' current positions, with a triangle rule of
     degree ``order``: the background cells of ``efg.integration = "gauss"``, whose Gauss
-    point ``3 t + k`` is the same material point at every step.
+    point ``3 t + k`` is the same material point at every step until the triangles are
+    rebuilt (:mod:`soilwater.efg.rebuild`).
 
     Parameters
     ----------

@@ -26,13 +26,16 @@ position loads the boundary, with the edge tractions; under gravity the buoyant 
 the integration points (:mod:`soilwater.physics.geostatic`) loads the domain.
 
 Where the material state lives is ``efg.integration``. With ``"gauss"`` it lives at the
-Gauss points of the initial Delaunay triangles, which move with the nodes: each step
+Gauss points of Delaunay triangles of the nodes, which move with the nodes: each step
 starts from the stresses and states that satisfied equilibrium at the end of the last, and
-a step that would turn a triangle over is cut back. With ``"paper"`` (the paper's scheme)
-it lives on the nodes: at the start of a step the integration points of cells rebuilt on
-the current nodes take stress and state from the nodes by MLS interpolation, and after a
-converged step the nodes update their own state with the nodal stretching ``D^I`` (the one
-that enters ERR, paper eq. 1); that carried state is not in equilibrium. With ``"nodal"``
+a step that would turn a triangle over is cut back; after a step whose worst triangle is
+below ``efg.rebuild_quality`` the nodes are re-triangulated, the state carried to the new
+Gauss points and re-equilibrated with no time increment (:mod:`soilwater.efg.rebuild`).
+With ``"paper"`` (the paper's scheme) it lives on the nodes: at the start of a step the
+integration points of cells rebuilt on the current nodes take stress and state from the
+nodes by MLS interpolation, and after a converged step the nodes update their own state
+with the nodal stretching ``D^I`` (the one that enters ERR, paper eq. 1); that carried
+state is not in equilibrium. With ``"nodal"``
 the nodes are the integration points (stabilised conforming nodal integration,
 :mod:`soilwater.efg.smoothing`) and keep the state their own equilibrium converged to;
 their smoothing cells come from triangles that move with the nodes and are re-triangulated
@@ -69,6 +72,7 @@ from soilwater.efg.essential.penalty import factors
 from soilwater.efg.mls import ShapeFunctions
 from soilwater.efg.model import Model, Points
 from soilwater.efg.quadrature import lagrangian_cells, nodal_average
+from soilwater.efg.rebuild import RECORD, rebuild
 from soilwater.efg.smoothing import nodal_cells
 from soilwater.geometry.quality import cell_quality
 from soilwater.geometry.triangulation import delaunay_triangles
@@ -99,12 +103,15 @@ def solve(case, progress=True):
         Bad supports (too small a scale factor) and other invalid settings.
     """
     model = Model.build(case)
-    return run(case, "efg", case.efg.to_dict(), _initial_points(model),
-               partial(_step, model), partial(_history_row, model),
-               partial(_snapshot, model),
-               {"dofs": 3 * len(case.nodes()), "stabilisation_beta": model.beta,
-                "stabilisation_tau": model.tau,
-                **factors(model, case.times())}, progress)
+    result = run(case, "efg", case.efg.to_dict(), _initial_points(model),
+                 partial(_step, model), partial(_history_row, model),
+                 partial(_snapshot, model),
+                 {"dofs": 3 * len(case.nodes()), "stabilisation_beta": model.beta,
+                  "stabilisation_tau": model.tau,
+                  **factors(model, case.times())}, progress)
+    if model.gauss:
+        result.summary["rebuilds"] = int(result.history["rebuilds"].iloc[-1])
+    return result
 
 
 def _initial_points(model):
@@ -126,17 +133,20 @@ def _initial_points(model):
                   reactions=np.zeros(len(case.boundary.segments())), cells=cells)
 
 
-def _cells(model, nodes, triangles=None):
-    """The next step's cells on ``nodes``: the Lagrangian triangles (``gauss``), the
-    smoothing cells of ``triangles`` (``nodal``; the initial ones by default), new
-    triangles where one of those is worse than ``efg.rebuild_quality`` or turned over, or
-    new background cells (``paper``)."""
+def _cells(model, nodes, previous=None):
+    """The next step's cells on ``nodes``: the triangles of the ``previous`` cells
+    (``gauss``: the same material points, with their rebuild records; ``nodal``: their
+    smoothing cells; the initial triangles by default), for ``nodal`` new triangles where
+    one of those is worse than ``efg.rebuild_quality`` or turned over, or new background
+    cells (``paper``). The rebuild of ``gauss`` is :func:`soilwater.efg.rebuild.rebuild`'s,
+    after the step."""
     s = model.case.efg
-    if model.gauss:
-        return lagrangian_cells(nodes, model.triangles, s.order)
     if not model.consistent:
         return background_cells(model, nodes)
-    triangles = model.triangles if triangles is None else triangles
+    triangles = model.triangles if previous is None else previous.triangles
+    if model.gauss:
+        cells = lagrangian_cells(nodes, triangles, s.order)
+        return cells if previous is None else cells._replace(rebuilds=previous.rebuilds)
     if cell_quality(nodes[triangles])[1].min() < s.rebuild_quality:
         triangles, _ = delaunay_triangles(nodes, nodes[model.loop])
     return nodal_cells(nodes, triangles)
@@ -147,17 +157,22 @@ def _step(model, points, t0, t1, stats):
 
     The new points carry the background cells of their own configuration, on which the
     next step integrates (and its history row measures them), and the smallest rcond of
-    this step's MLS moment matrices (:func:`soilwater.efg.discretisation.min_rcond`)."""
+    this step's MLS moment matrices (:func:`soilwater.efg.discretisation.min_rcond`).
+    With ``gauss``, cells due for it are then rebuilt (:func:`soilwater.efg.rebuild.rebuild`);
+    the iterations count the re-equilibration's."""
     disc = discretise(model, points.nodes, np.vstack([points.nodes, points.probes]),
                        stats["timings"], points.cells)
     system = System(model, points, disc, t0, t1, stats["timings"])
     iterations, residual = newton(system, stats)
     done = system.finish()
     with timed(stats["timings"], "cells_s"):
-        done.cells = _cells(model, done.nodes, disc.triangles)
+        done.cells = _cells(model, done.nodes, points.cells)
     done.rcond = min_rcond(disc)
     if model.case.diagnostics.uniqueness:
         done.uniqueness = _uniqueness(model, disc, system.domain_tangent(), system.n)
+    if model.gauss:
+        done, more = rebuild(model, done, t1, stats)
+        iterations += more
     return done, iterations, residual
 
 
@@ -183,7 +198,8 @@ def _history_row(model, points, t, dt, info):
     step integrates on the very cells measured here (no cells are built twice); square cells
     stay squares (90 degrees, quality 1, quarter cells included). ``min_rcond`` is the
     step's (:func:`soilwater.efg.discretisation.min_rcond`; of the last substep of a level
-    that was cut back)."""
+    that was cut back). With ``gauss``, the rebuilds' columns (:func:`_rebuild_columns`);
+    after a rebuild the cells measured are the new ones."""
     case = model.case
     top = model.loop[model.edges == EDGES.index("top")]
     probes = ()
@@ -199,10 +215,22 @@ def _history_row(model, points, t, dt, info):
                 for (_, seg), k, force in zip(case.boundary.segments(), case.segment_nodes(),
                                               points.reactions)]
     weights = points.cells.weights if model.consistent else None
-    return history_row(case, t, dt, info, points.stress, points.stretching,
-                       points.nodes[top], nodes0[top], weights=weights, probes=probes,
-                       uniqueness=uniqueness, segments=segments, cells=points.cells.cells,
-                       rcond=points.rcond)
+    row = history_row(case, t, dt, info, points.stress, points.stretching,
+                      points.nodes[top], nodes0[top], weights=weights, probes=probes,
+                      uniqueness=uniqueness, segments=segments, cells=points.cells.cells,
+                      rcond=points.rcond)
+    if model.gauss:
+        row.update(_rebuild_columns(points.cells.rebuilds))
+    return row
+
+
+def _rebuild_columns(rebuilds):
+    """The history columns of the rebuilds of ``gauss`` (:mod:`soilwater.efg.rebuild`):
+    ``rebuilds``, their count so far, and ``rebuild_<entry>``, the last one's record
+    (:data:`soilwater.efg.rebuild.RECORD`; NaN before the first; read it where
+    ``rebuilds`` grows)."""
+    last = rebuilds[-1] if rebuilds else dict.fromkeys(RECORD, np.nan)
+    return {"rebuilds": len(rebuilds), **{f"rebuild_{k}": last[k] for k in RECORD}}
 
 
 def _snapshot(model, points, t):

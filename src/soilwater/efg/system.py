@@ -217,7 +217,8 @@ class System:
     def finish(self):
         """The points after convergence: the converged state at the integration points
         (``gauss``, ``nodal``) or the nodes' own update with D^I (``paper``), positions,
-        gaps, probes."""
+        gaps, probes; with no time increment (a re-equilibration,
+        :mod:`soilwater.efg.rebuild`) the stretching of the last step."""
         points, disc, n = self.points, self.disc, self.n
         at = disc.at_points
         if self.model.consistent:
@@ -245,7 +246,8 @@ class System:
                       plate=self.plate,
                       plate_gap=np.where(disc.bc.rigid, self.plate_gap, 0.0),
                       probes=points.probes + at.probes.phi @ move,
-                      stretching=deps / self.dt, reactions=reactions)
+                      stretching=deps / self.dt if self.dt else points.stretching,
+                      reactions=reactions)
 
 
 def _tangent(model, disc, stress, total, tangent, J, Finv, dt, v_n, grad_p, boundary):
