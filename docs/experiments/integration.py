@@ -12,10 +12,24 @@ of :func:`soilwater.studies.harness.grids.refined`:
 * ``--steps``: the footing pressure at 0.1 B over Prandtl's against the steps per 0.5 B,
   with the successive differences;
 * ``--drift``: the specific volume's drift from its initial value at 0.1 B (exactly 0
-  undrained), worst point and volume-weighted mean.
+  undrained), worst point and volume-weighted mean;
+* ``--reach``: the footing pushed to ``--to`` B with ``--per`` steps per 0.5 B, each run
+  stopping where a step fails: how far it gets, the pressure over Prandtl's at each
+  quarter B, how often its triangles are rebuilt (``gauss``: with a transfer and a
+  re-equilibration, :mod:`soilwater.efg.rebuild`; ``nodal``: re-triangulated), the
+  out-of-balance of the carried state before and after the re-equilibration (worst over
+  the rebuilds, in Newton tolerances), and the kink a rebuild leaves in the pressure
+  curve: a step's increment less the mean of its neighbours', at the step that rebuilds
+  and the next (``gauss`` re-equilibrates within its step, ``nodal`` integrates on its new
+  cells from the next): the median over rebuilds of the larger of the two, the largest,
+  and the median over the other steps.
 
 ``python docs/experiments/integration.py --steps --core 4 --schemes paper gauss nodal``
-(about two minutes; ``--core 2`` for 10 x 10 nodes).
+(about two minutes; ``--core 2`` for 10 x 10 nodes). ``python
+docs/experiments/integration.py --reach --core 2 --to 2`` (about a minute).
+
+The runs are penalty without stabilisation (``efg.essential`` and ``efg.stabilisation``
+passed explicitly; ``--set`` overrides them).
 """
 
 import argparse
@@ -35,6 +49,8 @@ from soilwater.studies.harness.grids import refined
 
 #: Settlement rate of the built-in footing [m/s]: 0.1 B is reached at 10 s.
 TO_TENTH = 10.0
+#: The settings every run passes (their defaults are not the measured ones' to rely on).
+MEASURED = ("efg.essential=penalty", "efg.stabilisation=none")
 
 
 def footing(core, scheme, steps_per_half, end=TO_TENTH, extra=()):
@@ -42,7 +58,7 @@ def footing(core, scheme, steps_per_half, end=TO_TENTH, extra=()):
     steps = max(1, round(steps_per_half * end / 50.0))
     return soilwater.load_case("strip-footing", *refined(core)[2:],
                                f"efg.integration={scheme}", f"time.end={end!r}",
-                               f"time.steps={steps}", *extra)
+                               f"time.steps={steps}", *MEASURED, *extra)
 
 
 def _stats():
@@ -68,7 +84,7 @@ def consistency(core, schemes, steps_per_half, count):
             system = _system(model, points, times[k], times[k + 1])
             newton(system, _stats())
             points = system.finish()
-            points.cells = solver._cells(model, points.nodes, system.disc.triangles)
+            points.cells = solver._cells(model, points.nodes, system.points.cells)
             carried = points.stress
             if not model.consistent:            # the nodes' state, back at the points
                 carried = system.disc.su.phi @ carried
@@ -120,11 +136,84 @@ def drift(core, schemes, counts):
                   f"{np.average(d, weights=w):15.4%}")
 
 
+def reach(core, schemes, per, to, extra=()):
+    """Each scheme's footing pushed to ``to`` B (module docstring); returns the rows."""
+    print("scheme  reached [B]  " + "  ".join(f"{q:g} B" for q in _quarters(to))
+          + "  rebuilds  out-of-balance before/after [tol]  kink at rebuilds median/max"
+          + "  elsewhere median")
+    rows = []
+    for scheme in schemes:
+        case = footing(core, scheme, per, end=10 * TO_TENTH * to,
+                       extra=("time.on_failure=stop", *extra))
+        result = soilwater.solve(case, "efg", progress=False)
+        h = result.history
+        pressure = (h["pressure@footing"].to_numpy()
+                    / (PRANDTL * undrained_strength(case.material())))
+        settlement = h.time.to_numpy() / (10 * TO_TENTH)
+        at = {q: float(pressure[np.isclose(settlement, q)][0])
+              if np.isclose(settlement, q).any() else np.nan for q in _quarters(to)}
+        rebuilt, kink = _rebuilt(result.snapshots), np.abs(_kinks(pressure))
+        touched = rebuilt | np.insert(rebuilt[:-1], 0, False)       # and the step after
+        worse = np.fmax(kink, np.append(kink[1:], np.nan))[rebuilt]
+        grows = np.diff(h["rebuilds"].to_numpy(), prepend=0) > 0 if "rebuilds" in h else []
+        balance = [float(h[f"rebuild_out_of_balance_{k}"][grows].max() / TOLERANCE)
+                   if np.any(grows) else np.nan for k in ("before", "after")]
+        row = {"scheme": scheme, "core": core, "reached": float(settlement[-1]),
+               "pressure": at, "rebuilds": int(rebuilt.sum()), "out_of_balance": balance,
+               "kink": [_finite(np.median, worse), _finite(np.max, kink[touched]),
+                        _finite(np.median, kink[~touched])],
+               "rebuild_steps": (np.flatnonzero(rebuilt) + 1).tolist(),
+               "stopped": result.summary["stopped"]}
+        rows.append(row)
+        print(f"{scheme:7s} {row['reached']:11.3f}  "
+              + "  ".join(f"{p:.4f}" for p in at.values())
+              + f"  {row['rebuilds']:8d}  {balance[0]:10.3g} / {balance[1]:.3g}"
+              + "  {:.4f} / {:.4f}  {:.4f}".format(*row["kink"]))
+    return rows
+
+
+def _finite(statistic, values):
+    """``statistic`` of the finite ``values``, NaN when there are none."""
+    values = values[np.isfinite(values)]
+    return float(statistic(values)) if len(values) else np.nan
+
+
+def _quarters(to):
+    """The settlements [B] a pressure is reported at: every quarter B up to ``to``."""
+    return np.arange(1, round(4 * to) + 1) / 4
+
+
+def _rebuilt(snapshots):
+    """Whether each step's triangles differ from the step before's (from the snapshots'
+    cells, one per step after the initial one; never for the paper's cells, written as
+    none)."""
+    n = len(snapshots[0].points)
+    if not snapshots[0].cells:
+        return np.zeros(len(snapshots) - 1, dtype=bool)
+    keys = [np.sort(np.ravel_multi_index(np.sort(s.cells[0][1], axis=1).T, (n, n, n)))
+            for s in snapshots]
+    return np.array([len(a) != len(b) or not np.array_equal(a, b)
+                     for a, b in zip(keys[:-1], keys[1:])])
+
+
+def _kinks(pressure):
+    """Each step's pressure increment less the mean of its neighbours' (NaN at the ends):
+    a jump the step adds to a smooth curve."""
+    dp = np.diff(pressure, prepend=0.0)
+    kink = np.full(len(dp), np.nan)
+    kink[1:-1] = dp[1:-1] - (dp[:-2] + dp[2:]) / 2
+    return kink
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--consistency", action="store_true")
     parser.add_argument("--steps", action="store_true")
     parser.add_argument("--drift", action="store_true")
+    parser.add_argument("--reach", action="store_true")
+    parser.add_argument("--to", type=float, default=1.0,
+                        help="settlement --reach pushes the footing to [B]")
+    parser.add_argument("--per", type=int, default=50, help="steps per 0.5 B of --reach")
     parser.add_argument("--core", type=int, default=4,
                         help="spacings per footing width B (4: 21 x 21 nodes)")
     parser.add_argument("--schemes", nargs="+", default=["paper", "gauss", "nodal"])
@@ -141,6 +230,8 @@ def main(argv=None):
         out["steps"] = steps(args.core, args.schemes, args.counts, tuple(args.set))
     if args.drift:
         drift(args.core, args.schemes, args.counts)
+    if args.reach:
+        out["reach"] = reach(args.core, args.schemes, args.per, args.to, tuple(args.set))
     return out
 
 
