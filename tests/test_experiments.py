@@ -224,6 +224,21 @@ def test_integration_schemes_steps():
                                 "--first", "1", "--schemes", "nodal"])
 
 
+def test_schemes():
+    rows = script("schemes").main(["--cases", "unconfined-compression", "inf-sup",
+                                   "--schemes", "paper", "nodal", "--essential", "penalty",
+                                   "--stabilisation", "none", "--sizes", "5", "9", *SHORT])
+    runs = [row for row in rows if row["case"] == "unconfined-compression"]
+    assert [row["integration"] for row in runs] == ["paper", "nodal"]
+    for row in runs:
+        assert row["completed"] and counts(row["newton"]) and positive(row["run_time"])
+        assert 0 <= row["path_error"] < 0.1 and 0 <= row["err_max"] < 0.01   # 2 steps
+    tests = [row for row in rows if row["case"] == "inf-sup"]
+    assert [(row["method"], row["n"]) for row in tests[::2]] == [
+        ("efg paper", 5), ("efg paper", 9), ("efg nodal", 5), ("efg nodal", 9)]
+    assert all(positive(row["beta"]) for row in tests), tests
+
+
 def test_locking_runs_every_table():
     out = script("locking").main([
         "--steps", "2", "--core", "2", "--cores", "2", "--fem-cores", "2",
