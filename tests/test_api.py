@@ -133,3 +133,22 @@ def test_import_soilwater_leaves_matplotlib_and_the_studies_alone(check):
     proc = subprocess.run([sys.executable, "-c", f"import sys; {check}"],
                           capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
+
+
+def test_efg_paper_runs_the_papers_configuration_and_names_it():
+    case = soilwater.load_case("terzaghi", "time.steps=2", "time.end=0.1")
+    paper = soilwater.solve(case, "efg-paper", progress=False)
+    default = soilwater.solve(case, "efg", progress=False)
+    assert paper.case.efg.integration == "paper"
+    assert (paper.case.efg.essential, paper.case.efg.stabilisation) == ("penalty", "none")
+    assert default.summary["configuration"] == "recommended"
+    assert default.case.efg == case.efg
+
+
+def test_efg_paper_refuses_a_setting_it_would_replace():
+    settings = soilwater.efg.settings
+    third = next(scheme for scheme in settings.INTEGRATIONS
+                 if scheme not in ("paper", settings.RECOMMENDED["integration"]))
+    case = soilwater.load_case("terzaghi", f"efg.integration={third}")
+    with pytest.raises(soilwater.InputError, match="efg.integration = .* efg-paper sets it"):
+        soilwater.solve(case, "efg-paper", progress=False)

@@ -66,6 +66,14 @@ def test_show_applies_overrides(capsys):
     assert "# 123 nodes" in capsys.readouterr().out
 
 
+def test_show_names_the_efg_configuration_in_force(capsys):
+    assert main(["show", "terzaghi"]) == 0
+    assert "runs the recommended EFG configuration" in capsys.readouterr().out
+    assert main(["show", "terzaghi", "--set", "efg.integration=paper",
+                 "--set", "efg.essential=nitsche"]) == 0
+    assert "custom EFG configuration: essential = nitsche" in capsys.readouterr().out
+
+
 @pytest.mark.parametrize("args,word", [
     (["show", "unconfined-compresion"], "unconfined-compresion"),
     (["show", "case.toml"], "viscosity"),

@@ -52,6 +52,9 @@ def test_a_method_s_settings_do_not_key_the_other_methods_runs():
     assert Job("soil-column", "fem-th", ("efg.scale_u=1.6",)).key() == fem.key()
     assert Job("soil-column", "efg", ("fem.remesh=delaunay",)).key() == efg.key()
     assert Job("soil-column", "efg", ("efg.scale_u=1.6",)).key() != efg.key()
+    paper = Job("soil-column", "efg-paper")
+    assert Job("soil-column", "efg-paper", ("fem.remesh=delaunay",)).key() == paper.key()
+    assert paper.key() != efg.key()
 
 
 def test_a_change_to_one_solver_keeps_the_other_solvers_runs(tmp_path, monkeypatch):

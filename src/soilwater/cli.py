@@ -241,9 +241,15 @@ def _show(args):
 
     from soilwater.case.loader import load_case
 
+    from soilwater.efg.settings import configuration, departures
+
     case = load_case(args.case, args.set)
     print(json.dumps(case.to_dict(), indent=2))
     print(f"# {len(case.nodes())} nodes, {len(case.times()) - 1} time steps")
+    name = configuration(case.efg)
+    changed = "" if name != "custom" else ": " + ", ".join(departures(case.efg))
+    print(f"# method efg runs the {name} EFG configuration{changed}; method efg-paper "
+          "the paper's")
 
 
 def _run(args):

@@ -1,26 +1,63 @@
 """The methods, by name, and :func:`solve`: run a case with one of them.
 
-``efg`` is the meshless element-free Galerkin solver (:mod:`soilwater.efg`); every other
-method is a scikit-fem element pair of :data:`soilwater.fem.spaces.PAIRS` (``fem-th``,
-``fem-p1p1``, ...). ``soilwater run --method``, the study harness and :func:`solve` all
-look methods up here, in :data:`METHODS`.
+``efg`` is the meshless element-free Galerkin solver (:mod:`soilwater.efg`) with the
+case's ``[efg]`` settings, whose defaults are the recommended configuration
+(:data:`soilwater.efg.settings.RECOMMENDED`); ``efg-paper`` is the same solver in the
+paper's configuration (:data:`soilwater.efg.settings.PAPER`), which reproduces the paper.
+Every other method is a scikit-fem element pair of :data:`soilwater.fem.spaces.PAIRS`
+(``fem-th``, ``fem-p1p1``, ...). ``soilwater run --method``, the study harness and
+:func:`solve` all look methods up here, in :data:`METHODS`.
 """
 
 from soilwater.case.loader import load_case
 from soilwater.case.model import Case
-from soilwater.errors import InputError
+from soilwater.efg.settings import PAPER, RECOMMENDED, configuration
+from soilwater.errors import InputError, require
 from soilwater.fem.spaces import PAIRS
 
 
 def _efg(case, progress=True):
-    """EFG: static elasticity for ``analysis = "static"``, else the coupled solver."""
+    """EFG: static elasticity for ``analysis = "static"``, else the coupled solver; the
+    summary names the configuration (:func:`soilwater.efg.settings.configuration`)."""
     if case.analysis == "static":
         from soilwater.efg.statics import solve
 
-        return solve(case)
-    from soilwater.efg.solver import solve
+        result = solve(case)
+    else:
+        from soilwater.efg.solver import solve
 
-    return solve(case, progress=progress)
+        result = solve(case, progress=progress)
+    result.summary["configuration"] = configuration(case.efg)
+    return result
+
+
+def paper(case):
+    """The case in the paper's EFG configuration: :data:`~soilwater.efg.settings.PAPER`
+    over its ``[efg]`` section.
+
+    Raises
+    ------
+    InputError
+        If the case sets one of those settings to a third value (neither the paper's nor
+        the recommended one), which ``efg-paper`` would silently replace.
+
+    Examples
+    --------
+    >>> import soilwater
+    >>> paper(soilwater.load_case("terzaghi")).efg.integration
+    'paper'
+    """
+    for key, value in PAPER.items():
+        given = getattr(case.efg, key)
+        require(given in (value, RECOMMENDED[key]),
+                f"efg.{key} = {given!r} is not the paper's: method efg-paper sets it to "
+                f"{value!r}; remove it from the case or run method efg")
+    return case.replace(*(f"efg.{key}={value}" for key, value in PAPER.items()))
+
+
+def _efg_paper(case, progress=True):
+    """EFG in the paper's configuration (:func:`paper`)."""
+    return _efg(paper(case), progress)
 
 
 def _fem(method):
@@ -33,8 +70,11 @@ def _fem(method):
     return solve
 
 
-#: Solvers by method name, ``(case, progress=True) -> Result``: ``efg`` and the FEM pairs.
-METHODS = {"efg": _efg, **{name: _fem(name) for name in PAIRS}}
+#: Solvers by method name, ``(case, progress=True) -> Result``: ``efg``, ``efg-paper``
+#: and the FEM pairs.
+METHODS = {"efg": _efg, "efg-paper": _efg_paper, **{name: _fem(name) for name in PAIRS}}
+#: The methods solved by EFG (:mod:`soilwater.efg`); the others by :mod:`soilwater.fem`.
+EFG_METHODS = ("efg", "efg-paper")
 
 
 def solver(method):
@@ -50,7 +90,7 @@ def solver(method):
     >>> solver("fem-q9")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    soilwater.errors.InputError: method 'fem-q9' is unknown: use one of efg, fem-th, ...
+    soilwater.errors.InputError: method 'fem-q9' is unknown: use one of efg, efg-paper, fem-th, ...
     """
     if method not in METHODS:
         raise InputError(f"method {method!r} is unknown: use one of {', '.join(METHODS)}")
@@ -66,7 +106,7 @@ def solve(case, method="efg", progress=True):
         A case (:func:`soilwater.load_case`), or a built-in case name or TOML file, loaded
         without overrides.
     method : str
-        ``"efg"`` or an FEM pair of :data:`METHODS` (``"fem-th"``, ...).
+        ``"efg"``, ``"efg-paper"`` or an FEM pair of :data:`METHODS` (``"fem-th"``, ...).
     progress : bool
         A progress bar over the time steps on the terminal.
 

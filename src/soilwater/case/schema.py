@@ -134,11 +134,12 @@ Schema (every case has the same one; unknown keys are an error)::
     scale_p = 1.3
     integration = "paper"             # where the material state lives: "paper" (nodes,
                                       # MLS-interpolated to cells rebuilt each step),
-                                      # "gauss" (Gauss points of the initial Delaunay
-                                      # triangles, moved with the nodes) or "nodal"
+                                      # "gauss" (Gauss points of Delaunay triangles
+                                      # moved with the nodes) or "nodal"
                                       # (the nodes: stabilised conforming nodal
                                       # integration on median-dual cells)
-    rebuild_quality = 0.3             # "nodal" re-triangulates below this cell quality
+    rebuild_quality = 0.3             # "nodal" and "gauss" re-triangulate below this
+                                      # cell quality
     cells = "delaunay"                # background cells: delaunay or squares ("paper")
     order = 2                         # Gauss order (squares: per direction; triangles:
                                       # degree, at most 19)

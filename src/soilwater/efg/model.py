@@ -2,8 +2,8 @@
 (:class:`Points`), carried from step to step.
 
 The material points are the nodes with ``efg.integration = "paper"`` or ``"nodal"`` and
-the Gauss points of the initial Delaunay triangles with ``"gauss"``
-(:data:`soilwater.efg.settings.INTEGRATIONS`).
+the Gauss points of the Delaunay triangles with ``"gauss"`` (the initial ones until a
+rebuild) (:data:`soilwater.efg.settings.INTEGRATIONS`).
 """
 
 from dataclasses import dataclass

@@ -33,9 +33,11 @@ CELLS = ("delaunay", "squares")
 INTEGRATIONS = ("paper", "gauss", "nodal")
 """Where ``efg.integration`` keeps the material state: ``paper``, on the nodes, taken to
 the Gauss points of cells rebuilt each step by MLS interpolation and updated at the nodes
-after each step (the paper's scheme); ``gauss``, at the Gauss points of the initial
-Delaunay triangles moved with the nodes, where equilibrium is integrated; ``nodal``, on
-the nodes as the integration points of stabilised conforming nodal integration
+after each step (the paper's scheme); ``gauss``, at the Gauss points of Delaunay
+triangles of the nodes moved with them, where equilibrium is integrated, rebuilt when
+their quality falls below ``rebuild_quality`` with a state transfer and a
+re-equilibration (:mod:`soilwater.efg.rebuild`); ``nodal``, on the nodes as the
+integration points of stabilised conforming nodal integration
 (:mod:`soilwater.efg.smoothing`), whose triangles are rebuilt when their quality falls
 below ``rebuild_quality``."""
 #: Default ``efg.rebuild_quality``: the FEM re-meshing's threshold (``fem.remesh_quality``).
@@ -151,6 +153,56 @@ class Weight:
 QUARTIC_WEIGHT = Weight("quartic", QUARTIC)
 """The default weight of u and p_w."""
 
+#: The paper's configuration: the state on the nodes, taken to Gauss points of Delaunay
+#: cells rebuilt every step (``integration = "paper"``), penalty essential conditions and
+#: no pressure stabilisation. Method ``efg-paper`` runs it, to reproduce the paper.
+PAPER = {"integration": "paper", "essential": "penalty", "stabilisation": "none"}
+#: The recommended configuration, the defaults of :class:`EFGSettings` and of method
+#: ``efg``. Still the paper's: the measurements point to gauss, nitsche and
+#: perturbation, which becomes the default once every study runs both configurations.
+RECOMMENDED = {"integration": "paper", "essential": "penalty", "stabilisation": "none"}
+#: The named configurations: the settings each fixes (the others are the case's).
+CONFIGURATIONS = {"recommended": RECOMMENDED, "paper": PAPER}
+
+
+def configuration(settings):
+    """The name of the configuration ``settings`` are in, or ``"custom"``.
+
+    Parameters
+    ----------
+    settings : EFGSettings
+
+    Returns
+    -------
+    str
+        ``"recommended"`` when the settings have every value of :data:`RECOMMENDED`,
+        else ``"paper"`` when they have every value of :data:`PAPER`, else ``"custom"``
+        (the recommended name wins when the two coincide).
+
+    Examples
+    --------
+    >>> configuration(EFGSettings())
+    'recommended'
+    >>> configuration(EFGSettings(**{**PAPER, "essential": "nitsche"}))
+    'custom'
+    """
+    for name, values in CONFIGURATIONS.items():
+        if all(getattr(settings, key) == value for key, value in values.items()):
+            return name
+    return "custom"
+
+
+def departures(settings, name="recommended"):
+    """The settings that differ from a named configuration, as ``key = value`` strings.
+
+    Examples
+    --------
+    >>> departures(EFGSettings(**{**PAPER, "essential": "nitsche"}), "paper")
+    ['essential = nitsche (paper: penalty)']
+    """
+    return [f"{key} = {getattr(settings, key)} ({name}: {value})"
+            for key, value in CONFIGURATIONS[name].items() if getattr(settings, key) != value]
+
 
 @dataclass(frozen=True)
 class EFGSettings:
@@ -161,7 +213,10 @@ class EFGSettings:
     factors (support = scale x distance to the 8th nearest node, dimensionless);
     ``integration`` is where the material state lives (:data:`INTEGRATIONS`);
     ``rebuild_quality`` is the :func:`soilwater.geometry.quality.cell_quality` below which
-    ``nodal`` re-triangulates its nodes (dimensionless, 0 to 1);
+    the triangles of ``nodal`` and ``gauss`` are re-triangulated (Delaunay on the current
+    nodes) after a converged step; ``gauss`` then carries its Gauss-point state to the new
+    triangles (:func:`soilwater.fem.transfer.transfer`) and re-equilibrates it with no
+    time increment (:mod:`soilwater.efg.rebuild`) (dimensionless, 0 to 1);
     ``cells`` is ``delaunay`` (rebuilt every step) or ``squares`` (quarter cells along
     the boundary), with ``integration = "paper"``; ``order`` is the Gauss order of the
     cells; ``essential`` is how
@@ -189,14 +244,14 @@ class EFGSettings:
     scale_u: float = DEFAULT_SCALE
     weight_p: Weight = QUARTIC_WEIGHT
     scale_p: float = DEFAULT_SCALE
-    integration: str = "paper"
+    integration: str = RECOMMENDED["integration"]
     rebuild_quality: float = REBUILD_QUALITY
     cells: str = "delaunay"
     order: int = 2
-    essential: str = "penalty"
+    essential: str = RECOMMENDED["essential"]
     penalty: float = 1e6
     correction: str = "vci"
-    stabilisation: str = "none"
+    stabilisation: str = RECOMMENDED["stabilisation"]
     stabilisation_factor: float = 1.0
 
     def __post_init__(self):

@@ -48,10 +48,12 @@ def driver_paths():
 
 
 def unconfined_err():
-    """EFG (Delaunay, squares) and fem-th unconfined compression in 50 steps: ERR, the
+    """EFG in the paper's configuration (Delaunay, squares) and fem-th unconfined
+    compression in 50 steps: ERR, the
     uniqueness indicator and p', q (over p'0) per step; ``regime`` is ``after`` from the
     first step whose indicator is not positive (the discrete onset)."""
-    runs = [("efg", "efg.cells=delaunay"), ("efg", "efg.cells=squares"), ("fem-th", "")]
+    runs = [("efg-paper", "efg.cells=delaunay"), ("efg-paper", "efg.cells=squares"),
+            ("fem-th", "")]
     outcomes = _run([Job("unconfined-compression", method, tuple(filter(None, (o,)))
                          + ("time.steps=50", "diagnostics.uniqueness=true"))
                      for method, o in runs])
@@ -69,18 +71,21 @@ def unconfined_err():
 
 
 def column_stability():
-    """EFG soil column (5 x 41 nodes, first step, k = 0 and 1e-5): the Table 2 sweep of
-    the paper's three weight pairs at scale factors 1.3 and 2.0."""
+    """EFG soil column in the paper's configuration (5 x 41 nodes, first step, k = 0 and
+    1e-5): the Table 2 sweep of the paper's three weight pairs at scale factors 1.3 and
+    2.0."""
     pairs = {k: v for k, v in stability.COMBINATIONS.items() if k != "E-B/E-B"}
-    return stability.table2(scales=(1.3, 2.0), combinations=pairs)
+    return stability.table2(scales=(1.3, 2.0), combinations=pairs, method="efg-paper")
 
 
 def consolidation_errors():
-    """Terzaghi: EFG (3 x 21 nodes) against the closed form, fem-q1q1 against MOOSE."""
-    efg, q1q1 = _run([Job("terzaghi", "efg", ("discretisation.nx=3", "discretisation.ny=21")),
+    """Terzaghi: EFG in the paper's configuration (3 x 21 nodes) against the closed form,
+    fem-q1q1 against MOOSE."""
+    efg, q1q1 = _run([Job("terzaghi", "efg-paper", ("discretisation.nx=3",
+                                                   "discretisation.ny=21")),
                       Job("terzaghi", "fem-q1q1")])
     rows = []
-    for name, result in (("efg", efg), ("fem-q1q1", q1q1)):
+    for name, result in (("efg-paper", efg), ("fem-q1q1", q1q1)):
         errors = terzaghi_errors(result)
         rows += [(name, f"closed form {k}", v) for k, v in errors.pop("window_errors").items()]
         rows += [(name, k, v) for k, v in errors.items()]

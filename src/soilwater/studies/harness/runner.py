@@ -31,7 +31,7 @@ from soilwater.case.loader import load_case
 from soilwater.errors import SoilwaterError
 from soilwater.fem.spaces import PAIRS
 from soilwater.linalg.backends import identity, linear_solver
-from soilwater.methods import solver
+from soilwater.methods import EFG_METHODS, solver
 
 from soilwater.studies.harness.paths import CACHE, PACKAGE
 #: Scheduler address for every sweep of this process (``--dask ADDRESS``), or None.
@@ -62,7 +62,7 @@ class Job:
         with linear_solver(self.linear_solver):
             solver = identity()
         case = load_case(self.case, self.overrides).to_dict()
-        case.pop("fem" if self.method == "efg" else "efg", None)
+        case.pop("fem" if self.method in EFG_METHODS else "efg", None)
         spec = {"case": case,
                 "method": self.method, "linear_solver": solver,
                 "code": code_version(self.method)}
@@ -86,7 +86,7 @@ class Outcome:
 
 #: The package folders a method's solver is made of, besides the shared library (every
 #: module outside ``efg/``, ``fem/`` and ``studies/``).
-SOURCES = {"efg": ("efg",), **{name: ("fem",) for name in PAIRS}}
+SOURCES = {**{name: ("efg",) for name in EFG_METHODS}, **{name: ("fem",) for name in PAIRS}}
 _APART = ("efg", "fem", "studies")
 
 

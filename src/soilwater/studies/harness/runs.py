@@ -11,12 +11,17 @@ from soilwater.errors import SoilwaterError
 from soilwater.studies.harness import runner
 
 
-#: The runs of the paper's Figs. 4 and 6: label -> (method, overrides).
+#: The runs of the paper's Figs. 4 and 6: label -> (method, overrides): EFG in the
+#: paper's configuration (``efg-paper``) with its cells and gradient corrections, EFG in
+#: the recommended configuration (``efg``) and two FEM pairs.
 PATH_RUNS = {
-    "EFG, Delaunay cells": ("efg", ("efg.cells=delaunay",)),
-    "EFG, square cells": ("efg", ("efg.cells=squares",)),
-    "EFG, Delaunay, plain Gauss": ("efg", ("efg.cells=delaunay", "efg.correction=none")),
-    "EFG, squares, plain Gauss": ("efg", ("efg.cells=squares", "efg.correction=none")),
+    "EFG paper, Delaunay cells": ("efg-paper", ("efg.cells=delaunay",)),
+    "EFG paper, square cells": ("efg-paper", ("efg.cells=squares",)),
+    "EFG paper, Delaunay, plain Gauss": ("efg-paper", ("efg.cells=delaunay",
+                                                       "efg.correction=none")),
+    "EFG paper, squares, plain Gauss": ("efg-paper", ("efg.cells=squares",
+                                                      "efg.correction=none")),
+    "EFG recommended": ("efg", ()),
     "FEM Taylor-Hood (fem-th)": ("fem-th", ()),
     "FEM P1/P1 (fem-p1p1)": ("fem-p1p1", ()),
 }
@@ -53,8 +58,8 @@ FEM_METHODS = ("fem-th", "fem-p1p1", "fem-p1p1-stab", "fem-q1q1", "fem-q2q1")
 def run_style(k):
     """Line style of the k-th run of :data:`PATH_RUNS` in a figure: colours for
     cells/methods, dashes for variants."""
-    ls, color = [("-", "C0"), ("--", "C1"), (":", "C0"), (":", "C1"), ("-", "C2"),
-                 ("-.", "C3")][k % 6]
+    ls, color = [("-", "C0"), ("--", "C1"), (":", "C0"), (":", "C1"), ("-", "C4"),
+                 ("-", "C2"), ("-.", "C3")][k % 7]
     return {"ls": ls, "color": color}
 
 

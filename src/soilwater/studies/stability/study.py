@@ -36,13 +36,14 @@ TABLE2_SCALES = (1.3, 1.6, 2.0, 2.5, 3.0)
 
 
 def table2(scales=TABLE2_SCALES, combinations=COMBINATIONS, permeabilities=(0.0, 1e-5),
-           grid=(5, 41), dt=10.0):
+           grid=(5, 41), dt=10.0, method="efg"):
     """The paper's Table 2 as a sweep that varies one factor: the nodes in a support.
 
     Every weight combination at every scale factor (u and p_w alike) on one grid with
     one first step ``dt`` [s] (``h^2 / (c_v dt)`` = 30 at k = 1e-5 on 5 x 41 nodes), so
-    the grid aspect and the ratio stay fixed while the supports grow. Interior pollution
-    and its rating as in :func:`soilwater.studies.harness.metrics.column_pollution`.
+    the grid aspect and the ratio stay fixed while the supports grow, solved by
+    ``method`` (``efg`` or ``efg-paper``). Interior pollution and its rating as in
+    :func:`soilwater.studies.harness.metrics.column_pollution`.
 
     Returns
     -------
@@ -55,7 +56,7 @@ def table2(scales=TABLE2_SCALES, combinations=COMBINATIONS, permeabilities=(0.0,
     results = solved([("soil-column", (
         f"material.permeability={k}", f"discretisation.nx={nx}", f"discretisation.ny={ny}",
         "time.steps=1", f"time.end={dt!r}", f"efg.weight_u={wu}", f"efg.weight_p={wp}",
-        f"efg.scale_u={scale}", f"efg.scale_p={scale}"))
+        f"efg.scale_u={scale}", f"efg.scale_p={scale}"), method)
         for k, (_, (wu, wp)), scale in settings])
     rows = []
     for (k, (label, _), scale), result in zip(settings, results):
