@@ -28,8 +28,7 @@ with ``time.on_failure = "stop"`` (``reached``: the fraction of its end time it 
   (:func:`soilwater.studies.footing_consolidation.study.summary`);
 * ``inf-sup``: the numerical inf-sup test (:mod:`soilwater.diagnostics.pairs`) with the
   forms built on each scheme's own integration points and shape functions
-  (:func:`scheme_forms`; the library's ``soilwater infsup`` builds them on the paper's
-  background cells whatever the scheme).
+  (:func:`soilwater.diagnostics.pairs._efg`).
 
 ``python docs/experiments/schemes.py`` (about an hour on 2 cores);
 ``--cases terzaghi mandel`` for a few of them.
@@ -37,17 +36,13 @@ with ``time.on_failure = "stop"`` (``reached``: the fraction of its end time it 
 
 import argparse
 import itertools
-from collections import defaultdict
 
 import numpy as np
 import pandas as pd
 
 from soilwater.case.loader import load_case
 from soilwater.diagnostics import pairs
-from soilwater.diagnostics.infsup import coefficients, inf_sup
-from soilwater.efg import solver
-from soilwater.efg.discretisation import discretise
-from soilwater.efg.model import Model
+from soilwater.diagnostics.infsup import inf_sup
 from soilwater.errors import SoilwaterError
 from soilwater.references import gibson
 from soilwater.references.closed_forms import PRANDTL, undrained_strength
@@ -219,23 +214,6 @@ def footing_consolidation(configs, extra=()):
     return rows
 
 
-def scheme_forms(case):
-    """The inf-sup test's forms (:func:`soilwater.diagnostics.pairs._efg`) with ``S``,
-    ``B``, ``T`` and ``C`` on the integration points and shape functions of the case's
-    ``efg.integration`` in its initial configuration (nodal: the nodes with smoothed
-    gradients on their smoothing cells); the boundary subspaces are the library's."""
-    forms = pairs._efg(case)
-    model, nodes = Model.build(case), case.nodes()
-    disc = discretise(model, nodes, nodes, defaultdict(float), solver._cells(model, nodes))
-    gram, div, mass, stab = coefficients(disc.w, case.geometry.height,
-                                         pairs._in_modulus(model))
-    C = (pairs._efg_block(disc.sp, disc.sp, stab)
-         + model.tau * model.scales.modulus * disc.fluctuation)
-    return {**forms, "S": pairs._efg_block(disc.su, disc.su, gram),
-            "B": pairs._efg_block(disc.sp, disc.su, div),
-            "T": pairs._efg_block(disc.sp, disc.sp, mass), "C": C}
-
-
 def infsup(schemes, stabilisations, sizes):
     """beta and the zero modes per scheme, stabilisation, boundary and size, and whether
     beta levels off (:func:`soilwater.diagnostics.pairs.slopes`)."""
@@ -243,7 +221,7 @@ def infsup(schemes, stabilisations, sizes):
     for scheme, stabilisation, n in itertools.product(schemes, stabilisations, sizes):
         case = pairs.square(n, (f"efg.integration={scheme}",
                                 f"efg.stabilisation={stabilisation}"))
-        forms = scheme_forms(case)
+        forms = pairs._efg(case)
         for boundary in pairs.BOUNDARIES:
             beta, zero = inf_sup(forms["S"], forms["B"], forms["T"], forms[boundary],
                                  hydrostatic=boundary == "dirichlet", C=forms["C"])

@@ -7,7 +7,9 @@ the three matrices from the shape functions and quadrature its solver uses:
 
 * FEM pairs: scikit-fem bases of :mod:`soilwater.fem.spaces` with the pair's Gauss rule;
 * EFG: MLS shape functions of u and p_w (``[efg]`` weights and scale factors) at the
-  background cells' integration points (``efg.cells``, ``efg.order``). The divergence is
+  integration points a run of its ``efg.integration`` starts with (the background cells'
+  of ``efg.cells`` and ``efg.order``; nodal: the nodes, gradients smoothed over their
+  cells). The divergence is
   that of the continuity equation, MLS trial gradients (the VCI correction acts on the
   momentum equation's test gradients only).
 
@@ -28,6 +30,7 @@ the cell-fluctuation form on the background cells (``tau = 1/G``,
 
 import os
 import tempfile
+from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
@@ -40,13 +43,12 @@ import soilwater.efg.solver
 import soilwater.fem.solver
 from soilwater.efg.assembly import Pattern, scatter
 from soilwater.efg.boundary import boundary_points, segment_edges
+from soilwater.efg.discretisation import discretise
 from soilwater.efg.mls import ShapeFunctions
-from soilwater.efg.quadrature import background
 from soilwater.fem.assembly import Shapes, block
 from soilwater.fem.spaces import PAIRS, Space, cell_bases
 from soilwater.errors import require
 from soilwater.diagnostics.infsup import coefficients, inf_sup
-from soilwater.physics.weakform import fluctuation
 from soilwater.case.loader import load_case
 from soilwater.case.schema import apply_override
 from soilwater.case.validation import case_from_dict
@@ -211,23 +213,24 @@ def _fem(case, method):
 
 
 def _efg(case):
-    """S, B, T, C and the boundary variants of EFG on the case's nodes and cells."""
+    """S, B, T, C and the boundary variants of EFG on the case's nodes, with the
+    integration points and shape functions its ``efg.integration`` starts a run with
+    (:func:`soilwater.efg.discretisation.discretise` on the solver's first cells; nodal:
+    the nodes with gradients smoothed over their cells)."""
     s, nodes, loop = case.efg, case.nodes(), case.boundary_loop()
-    quad = background(case, nodes, loop, s)
-    su = ShapeFunctions.build(nodes, quad.points, s.weight_u, s.scale_u, key="efg.scale_u")
-    sp_ = ShapeFunctions.build(nodes, quad.points, s.weight_p, s.scale_p, key="efg.scale_p")
     model = soilwater.efg.solver.Model.build(case)
-    gram, div, mass, stab = coefficients(quad.weights, case.geometry.height,
-                                         _in_modulus(model))
-    C = _efg_block(sp_, sp_, stab) + (model.tau * model.scales.modulus
-                                      * fluctuation(sp_.phi, quad.weights, quad.cell))
+    disc = discretise(model, nodes, nodes, defaultdict(float),
+                      soilwater.efg.solver._cells(model, nodes))
+    gram, div, mass, stab = coefficients(disc.w, case.geometry.height, _in_modulus(model))
+    C = (_efg_block(disc.sp, disc.sp, stab)
+         + model.tau * model.scales.modulus * disc.fluctuation)
     samples = boundary_points(nodes, loop, segment_edges(nodes, loop, case.geometry),
                               order=SAMPLES)
     at_boundary = ShapeFunctions.build(nodes, samples.points, s.weight_u, s.scale_u,
                                        key="efg.scale_u").phi.toarray()
     zero = sla.null_space(at_boundary, rcond=RCOND)
-    return {"S": _efg_block(su, su, gram), "B": _efg_block(sp_, su, div),
-            "T": _efg_block(sp_, sp_, mass), "C": C,
+    return {"S": _efg_block(disc.su, disc.su, gram), "B": _efg_block(disc.sp, disc.su, div),
+            "T": _efg_block(disc.sp, disc.sp, mass), "C": C,
             "free": None, "dirichlet": sla.block_diag(zero, zero),
             "weights": f"{s.weight_u}/{s.weight_p}" + (
                 f"+{s.stabilisation}" if s.stabilisation != "none" else ""),
