@@ -29,7 +29,7 @@ def claims(uc, bif, fits, col, t2, ec, ft, foot):
     """The paper's claims, each with its verdict and the measurement behind it."""
     sq, de = (uc.loc[f"EFG, {c}, plain Gauss"] for c in ("squares", "Delaunay"))
     better = sq.err_before > de.err_before and sq.path_error_before > de.path_error_before
-    vci = bif.loc[["EFG paper, square cells", "EFG paper, Delaunay cells"], "err_before"]
+    vci = bif.loc[["EFG, square cells", "EFG, Delaunay cells"], "err_before"]
     plain = fits[(fits.method == "efg") & ~fits.weights.str.contains("+", regex=False)
                  & (fits.boundary == "dirichlet")]
     fem = fits.set_index(["method", "boundary"]).slope

@@ -15,12 +15,11 @@ from soilwater.studies.harness import runner
 #: paper's configuration (``efg-paper``) with its cells and gradient corrections, EFG in
 #: the recommended configuration (``efg``) and two FEM pairs.
 PATH_RUNS = {
-    "EFG paper, Delaunay cells": ("efg-paper", ("efg.cells=delaunay",)),
-    "EFG paper, square cells": ("efg-paper", ("efg.cells=squares",)),
-    "EFG paper, Delaunay, plain Gauss": ("efg-paper", ("efg.cells=delaunay",
-                                                       "efg.correction=none")),
-    "EFG paper, squares, plain Gauss": ("efg-paper", ("efg.cells=squares",
-                                                      "efg.correction=none")),
+    "EFG, Delaunay cells": ("efg-paper", ("efg.cells=delaunay",)),
+    "EFG, square cells": ("efg-paper", ("efg.cells=squares",)),
+    "EFG, Delaunay, plain Gauss": ("efg-paper", ("efg.cells=delaunay",
+                                                 "efg.correction=none")),
+    "EFG, squares, plain Gauss": ("efg-paper", ("efg.cells=squares", "efg.correction=none")),
     "EFG recommended": ("efg", ()),
     "FEM Taylor-Hood (fem-th)": ("fem-th", ()),
     "FEM P1/P1 (fem-p1p1)": ("fem-p1p1", ()),

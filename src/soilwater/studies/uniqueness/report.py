@@ -36,7 +36,7 @@ def section(data):
     at = cont.iloc[(cont.strain - c_onset).abs().argmin()]
     lost = bif[bif.onset.notna()]
     kept = bif[bif.onset.isna()]
-    plain = bif.loc[["EFG paper, squares, plain Gauss", "EFG paper, Delaunay, plain Gauss"], "err_before"]
+    plain = bif.loc[["EFG, squares, plain Gauss", "EFG, Delaunay, plain Gauss"], "err_before"]
     consistent = bif.err_before.drop(plain.index)
     steady = kept.drop(plain.index, errors="ignore")
     steady = steady[steady.departed == 0]

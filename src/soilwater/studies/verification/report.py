@@ -86,7 +86,7 @@ def section(data):
         tables.to_markdown(marked(below_noise(data["path summary"]), BRANCH_PATHS),
                            floatfmt="{:.3g}"),
         "The path error before the onset, "
-        f"{uc.loc['EFG paper, Delaunay cells', 'path_error_before']:.3g} p'0 for EFG and "
+        f"{uc.loc['EFG, Delaunay cells', 'path_error_before']:.3g} p'0 for EFG and "
         f"{uc.loc['FEM Taylor-Hood (fem-th)', 'path_error_before']:.3g} for fem-th, is "
         "the first-order time error of the return mapping (100 steps), the same for "
         "every method with consistent quadrature.",
