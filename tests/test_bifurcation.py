@@ -87,7 +87,7 @@ def test_cam_clay_loses_uniqueness_near_the_continuum_onset(method):
     branch: nothing past it is compared) lies within 4 % strain of the continuum one
     (7.98 %)."""
     case = load_case("unconfined-compression", [
-        "time.end=10.0", "time.steps=25", "efg.cells=squares",
+        "time.end=10.0", "time.steps=25", "efg.cells=squares", "efg.integration=paper",
         "diagnostics.uniqueness=true"])
     solve = efg_solve if method == "efg" else (lambda c, **k: fem_solve(c, method, **k))
     result = solve(case, progress=False)

@@ -69,9 +69,12 @@ def test_show_applies_overrides(capsys):
 def test_show_names_the_efg_configuration_in_force(capsys):
     assert main(["show", "terzaghi"]) == 0
     assert "runs the recommended EFG configuration" in capsys.readouterr().out
-    assert main(["show", "terzaghi", "--set", "efg.integration=paper",
-                 "--set", "efg.essential=nitsche"]) == 0
-    assert "custom EFG configuration: essential = nitsche" in capsys.readouterr().out
+    assert main(["show", "terzaghi", "--set", "efg.integration=paper"]) == 0
+    assert ("custom EFG configuration: integration = paper (recommended: gauss)"
+            in capsys.readouterr().out)
+    assert main(["show", "terzaghi", "--set", "efg.integration=paper", "--set",
+                 "efg.essential=penalty", "--set", "efg.stabilisation=none"]) == 0
+    assert "runs the paper EFG configuration" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("args,word", [

@@ -28,11 +28,15 @@ def test_equal_order_efg_pollutes_and_the_perturbation_removes_most_of_it(undrai
 
 
 def test_the_projection_removes_most_of_it_on_the_finer_grid(undrained):
-    """Measured 0.31 and 0.065 against 1.5 and 2.0 unstabilised: on 3 x 21 nodes the
-    cells are too coarse for the cell means to hold the drained-top layer."""
+    """Measured 0.29 and 0.24 against 4.0 and 1.8 unstabilised with Nitsche's conditions
+    (the recommended configuration's; with the penalty 0.31 and 0.065 against 1.5 and
+    2.0): on 3 x 21 nodes the cells are too coarse for the cell means to hold the
+    drained-top layer, and the perturbation does better on both grids (0.11, 0.089)."""
     plain = undrained.loc["efg Q/Q", "interior"]
     projected = undrained.loc["efg Q/Q, projection", "interior"]
-    assert projected["5x41"] < GOOD and projected["5x41"] < plain["5x41"] / 10
+    perturbed = undrained.loc["efg Q/Q, perturbation", "interior"]
+    assert projected["5x41"] < GOOD and projected["5x41"] < plain["5x41"] / 5
+    assert (perturbed < projected).all()
     assert projected["5x41"] < projected["3x21"] < plain["3x21"]
 
 
@@ -60,7 +64,7 @@ def test_the_factor_scales_the_perturbation_and_summary_records_it():
     four = Model.build(load_case("soil-column", [*stab, "efg.stabilisation_factor=4"]))
     assert one.beta == pytest.approx(one.scales.h**2 / (4 * one.scales.modulus))
     assert four.beta == pytest.approx(4 * one.beta)
-    assert Model.build(load_case("soil-column")).beta == 0.0
+    assert Model.build(load_case("soil-column", ["efg.stabilisation=none"])).beta == 0.0
     assert one.tau == 0.0
 
 

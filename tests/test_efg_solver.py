@@ -76,7 +76,7 @@ def test_soil_column_oscillation_grows_with_the_stability_number():
 
 
 @pytest.mark.parametrize("overrides,word", [
-    (["efg.scale_u=0.6", "efg.cells=squares"], "efg.scale_u"),
+    (["efg.scale_u=0.6", "efg.cells=squares", "efg.integration=paper"], "efg.scale_u"),
     (["material.permeability=-1e-6"], "permeability"),
     (["loading.velocity_gradient=[[0.0,0.0],[0.0,-3.0]]", "time.steps=1",
       "time.end=1.0"], "failed after 6 halvings"),

@@ -52,8 +52,10 @@ def test_solve_with_nothing_changed_is_the_solvers_run():
         with linear_solver("superlu"):
             own = common.solve(case, method)
             composed = common.solve(case, method, layout=lambda layout: layout)
-        for column in ("p", "q", "settlement", "iterations"):
-            np.testing.assert_array_equal(own.history[column], composed.history[column])
+        for column in ("p", "q", "settlement"):     # the same run, up to round-off
+            np.testing.assert_allclose(own.history[column], composed.history[column],
+                                       rtol=1e-10)
+        np.testing.assert_array_equal(own.history.iterations, composed.history.iterations)
 
 
 def test_krylov_steps():

@@ -13,7 +13,8 @@ import json
 import numpy as np
 import pytest
 
-from soilwater.efg.solver import solve as efg_solve
+import soilwater
+from soilwater.methods import EFG_METHODS
 from soilwater.fem.solver import solve as fem_solve
 from soilwater.errors import InputError
 from soilwater.case.loader import load_case
@@ -23,8 +24,8 @@ METHODS = ("efg", "fem-th", "fem-p1p1")
 
 
 def _solve(case, method):
-    if method == "efg":
-        return efg_solve(case, progress=False)
+    if method in EFG_METHODS:
+        return soilwater.solve(case, method, progress=False)
     return fem_solve(case, method, progress=False)
 
 
@@ -79,14 +80,15 @@ def test_oedometer_load_control_settlement_is_force_over_width_height_over_modul
     assert h["settlement@footing"].iloc[-1] == pytest.approx(force * HEIGHT / M, rel=1e-3)
 
 
-@pytest.mark.parametrize("method", ("efg", "fem-th"))
+@pytest.mark.parametrize("method", ("efg", "efg-paper", "fem-th"))
 def test_half_footing_leaves_the_rest_of_the_top_traction_free(method):
     """A rough footing on half the top of a 2 x 1 layer; the base is a named segment too.
 
     The sides are frictionless (ux fixed, uy free), so with the rest of the top traction
     free the base's vertical reaction balances the footing's: pressure x width agree
     (within 0.5 %, penalty and tolerance). The footing's settlement is rate x t exactly,
-    its nodes move with it (EFG: within 2 %), and the free half of the top does not.
+    its nodes move with it (EFG: within 2 % with the penalty, 15 % with Nitsche), and the
+    free half of the top does not.
     """
     rate = 1e-4 / END
     case = case_from_dict(_layer(
@@ -105,8 +107,11 @@ def test_half_footing_leaves_the_rest_of_the_top_traction_free(method):
     u = result.snapshots[-1].point_data["u"][: len(nodes)]
     under, rest = top & (nodes[:, 0] <= 1.0), top & (nodes[:, 0] > 1.0)
     # FEM imposes the nodes exactly; EFG's penalty acts at boundary Gauss points and
-    # its MLS field does not interpolate: measured 1.3 % off at the footing's edge node
-    assert np.allclose(u[under, 1], -rate * END, rtol=2e-2 if method == "efg" else 1e-9)
+    # its MLS field does not interpolate: measured 1.3 % off at the footing's edge node.
+    # Nitsche's weak condition lets the smooth MLS field round the corner where the
+    # condition changes type: measured 10 % off at the edge node, 4 % at x = 0
+    rtol = {"efg": 0.15, "efg-paper": 2e-2}.get(method, 1e-9)
+    assert np.allclose(u[under, 1], -rate * END, rtol=rtol)
     assert np.all(np.abs(u[rest, 1]) < 0.9 * rate * END)  # it would be the footing's
     # motion, were the rest of the edge tied to the footing
 

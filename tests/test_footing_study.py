@@ -63,27 +63,27 @@ def _deep(label, factor, reached):
         "substeps": 1, "run_time": 100.0, "reached": deep[keep][-1]})
 
 
-def _study(efg_factor, fem_deep_reach, nitsche=None):
-    """Curves of the study; ``nitsche``: ``(factor, reached)`` of an EFG variant
-    ``efg+nitsche`` on every density and to 1 B, or None for none."""
+def _study(efg_factor, fem_deep_reach, paper=None):
+    """Curves of the study; ``paper``: ``(factor, reached)`` of the EFG variant
+    ``efg-paper`` on every density and to 1 B, or None for none."""
     runs = []
     for core in (4, 8, 12):
         runs += [_run("fem-th", core, REF * (1 + 0.01 * (12 - core))),
                  _run("fem-p1p1-stab", core, REF * 1.05),
                  _run("efg", core, REF * efg_factor)]
-        if nitsche:
-            runs.append(_run("efg+nitsche", core, REF * nitsche[0],
-                             reached=min(nitsche[1], 0.5), method="efg"))
-    runs.append(_run("efg, 400 steps", 4, REF * efg_factor, steps=400, method="efg"))
+        if paper:
+            runs.append(_run("efg-paper", core, REF * paper[0],
+                             reached=min(paper[1], 0.5)))
+    runs.append(_run("efg-paper, 400 steps", 4, REF * efg_factor, steps=400))
     runs += [_deep("efg", efg_factor, 1.0), _deep("fem-th", 1.0, fem_deep_reach),
              _deep("fem-p1p1-stab", 1.05, fem_deep_reach)]
-    if nitsche:
-        runs.append(_deep("efg+nitsche", nitsche[0], nitsche[1]))
+    if paper:
+        runs.append(_deep("efg-paper", paper[0], paper[1]))
     table = pd.concat(runs, ignore_index=True)
     return footing.summary(table, reference=("fem-th", 12)), table
 
 
-@pytest.mark.parametrize("efg_factor, fem_deep_reach, nitsche, expected", [
+@pytest.mark.parametrize("efg_factor, fem_deep_reach, paper, expected", [
     (1.3, 1.0, None, "refuted"),        # FEM reaches as far, Taylor-Hood nearer everywhere
     (1.0, 1.0, None, "open"),           # as far and as near: nothing settles it
     (1.0, 0.6, None, "supported"),      # EFG goes further on the built-in nodes, as near
@@ -91,20 +91,20 @@ def _study(efg_factor, fem_deep_reach, nitsche=None):
     (1.3, 1.0, (1.0, 0.4), "open"),     # a variant as near as Taylor-Hood, but shorter
     (1.3, 0.6, (1.0, 1.0), "supported"),  # a variant further on the built-in nodes
 ])
-def test_verdict_follows_the_measures(efg_factor, fem_deep_reach, nitsche, expected):
-    assert footing.verdict(*_study(efg_factor, fem_deep_reach, nitsche))[0] == expected
+def test_verdict_follows_the_measures(efg_factor, fem_deep_reach, paper, expected):
+    assert footing.verdict(*_study(efg_factor, fem_deep_reach, paper))[0] == expected
 
 
 def test_the_verdict_names_each_efg_variant():
     measured = footing.verdict(*_study(1.3, 1.0, (1.0, 0.4)))[1]
-    assert "efg+nitsche 0.4" in measured and "for efg+nitsche (" in measured
+    assert "efg-paper 0.4" in measured and "for efg-paper (" in measured
 
 
-def test_the_section_counts_only_the_penalty_runs_step_series():
+def test_the_section_counts_only_the_paper_schemes_step_series():
     summary, _ = _study(1.3, 1.0, (1.0, 0.4))
     text = "\n".join(footing.section(summary))
-    assert "coarsest nodes with 100, 400 steps" in text
-    assert "efg+nitsche on 21x21 nodes at 0.4 B" in text
+    assert "efg-paper on the coarsest nodes with 100, 400 steps" in text
+    assert "efg-paper on 21x21 nodes at 0.4 B" in text
 
 
 def test_domain_summary_recovers_a_flamant_shift():

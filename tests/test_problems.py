@@ -210,7 +210,8 @@ REFUSED = [
     ("strip-footing", ["discretisation.x=[[4.0, 2]]"], "the last piece ends at 4 m"),
     ("strip-footing", ["discretisation.x=3"], "discretisation.x = 3"),
     ("strip-footing", ["discretisation.y=[[5.0, 2, 2000]]"], "discretisation.y"),
-    ("strip-footing", ["discretisation.x=[[10.0, 20, 2]]", "efg.cells=squares"],
+    ("strip-footing", ["discretisation.x=[[10.0, 20, 2]]", "efg.cells=squares",
+                       "efg.integration=paper"],
      "efg.cells = 'squares' needs a regular grid"),
     # 1000-fold along both axes over 2 spacings: the widest cell (9.99 m) over the
     # flattest (0.003996 m) has the aspect 2500
@@ -262,7 +263,8 @@ def test_lambda_not_above_kappa_in_a_case_file(tmp_path):
                       "probes.centre=[5e5, 5e5]"]),
     ("terzaghi", [f"efg.scale_u={SCALES[0]}", f"efg.scale_p={SCALES[1]}"]),
     ("terzaghi", ["efg.weight_u=E-A", "efg.weight_p= exp:1e-3 "]),
-    ("terzaghi", [f"efg.order={MAX_TRIANGLE_ORDER + 1}", "efg.cells=squares"]),
+    ("terzaghi", [f"efg.order={MAX_TRIANGLE_ORDER + 1}", "efg.cells=squares",
+                  "efg.integration=paper"]),
 ])
 def test_values_at_the_bounds_load(case, overrides):
     load_case(case, overrides)
@@ -365,7 +367,7 @@ def test_smallest_accepted_scale_works_on_every_builtin(name):
     regular = load_case(name).discretisation.regular
     scale = SCALES[0] if regular else DEFAULT_SCALE
     for cells in ("delaunay", "squares") if regular else ("delaunay",):
-        case = load_case(name, [f"efg.cells={cells}"])
+        case = load_case(name, [f"efg.cells={cells}", "efg.integration=paper"])
         nodes, loop = case.nodes(), case.boundary_loop()
         edges = segment_edges(nodes, loop, case.geometry)
         points = (background(case, nodes, loop, case.efg).points,

@@ -87,12 +87,13 @@ def test_the_prediction_is_the_documented_band():
     assert predicted["angle"] + predicted["normal"] == pytest.approx(90.0)
 
 
-@pytest.mark.parametrize("method", ["efg", "fem-th"])
+@pytest.mark.parametrize("method", ["efg", "efg-paper", "fem-th"])
 def test_a_rough_platen_strains_the_specimen_unevenly(method):
     """Four steps to 4 % axial strain: the smooth-platen specimen strains uniformly (to
     round-off), the rough one does not; the platen's columns are there, its settlement
     that of the prescribed top, H (1 - exp(-0.01 t)) (fem-th to round-off, EFG to its
-    penalty's gap: 7e-4 of it measured)."""
+    penalty's gap, 7e-4 of it measured, or the gap Nitsche's weak condition leaves at
+    the nodes, 4e-3 measured)."""
     few = ("time.steps=4", "time.end=4.0")
     fields = {}
     for name in ("unconfined-compression", CASE):
@@ -104,5 +105,5 @@ def test_a_rough_platen_strains_the_specimen_unevenly(method):
     h = result.history
     assert {"settlement@platen", "pressure@platen", "eps_a", "p", "q"} <= set(h.columns)
     np.testing.assert_allclose(h["settlement@platen"], 4.0 * (1 - np.exp(-0.01 * h.time)),
-                               rtol=1e-3)
+                               rtol=1e-2 if method == "efg" else 1e-3)
     assert (np.diff(h["pressure@platen"]) > 0).all() and h["pressure@platen"].iloc[0] > 0

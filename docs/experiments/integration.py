@@ -155,9 +155,9 @@ def reach(core, schemes, per, to, extra=()):
         rebuilt, kink = _rebuilt(result.snapshots), np.abs(_kinks(pressure))
         touched = rebuilt | np.insert(rebuilt[:-1], 0, False)       # and the step after
         worse = np.fmax(kink, np.append(kink[1:], np.nan))[rebuilt]
-        grows = np.diff(h["rebuilds"].to_numpy(), prepend=0) > 0 if "rebuilds" in h else []
-        balance = [float(h[f"rebuild_out_of_balance_{k}"][grows].max() / TOLERANCE)
-                   if np.any(grows) else np.nan for k in ("before", "after")]
+        records = result.summary.get("rebuild_records", [])
+        balance = [max(r[f"out_of_balance_{k}"] for r in records) / TOLERANCE
+                   if records else np.nan for k in ("before", "after")]
         row = {"scheme": scheme, "core": core, "reached": float(settlement[-1]),
                "pressure": at, "rebuilds": int(rebuilt.sum()), "out_of_balance": balance,
                "kink": [_finite(np.median, worse), _finite(np.max, kink[touched]),

@@ -126,7 +126,7 @@ HISTORY_UNITS = {
     "settlement": "m", "iterations": "-", "substeps": "-", "residual": "-",
     "linear_iterations": "-", "uniqueness": "-", "min_angle": "degree",
     "min_quality": "-", "min_rcond": "-", "displacement": "-", "stress": "-",
-    "energy": "-", "p_w@": "kPa", "settlement@": "m", "pressure@": "kPa",
+    "energy": "-", "rebuilds": "-", "p_w@": "kPa", "settlement@": "m", "pressure@": "kPa",
 }
 
 #: Units of the snapshot fields (:meth:`Result.mesh` point data), as

@@ -317,16 +317,9 @@ def _efg(table):
                                        defaults.stabilisation, STABILISATIONS),
               "stabilisation_factor": number(table, "stabilisation_factor", "efg",
                                               defaults.stabilisation_factor)}
-    require(values["integration"] == "paper" or values["cells"] == "delaunay",
-            f"efg.cells = \"{values['cells']}\" needs efg.integration = \"paper\" (the "
-            f"\"{values['integration']}\" scheme integrates on the nodes' own triangles): "
-            "use efg.cells = \"delaunay\"")
     require(0 < values["rebuild_quality"] < 1,
             f"efg.rebuild_quality = {values['rebuild_quality']:g} must lie between 0 and 1 "
             f"(a cell quality), e.g. {defaults.rebuild_quality:g}")
-    require(values["integration"] != "nodal" or values["stabilisation"] != "projection",
-            "efg.stabilisation = \"projection\" has nothing to project with "
-            "efg.integration = \"nodal\" (one point per cell): use \"perturbation\"")
     require(values["cells"] != "delaunay" or order <= MAX_TRIANGLE_ORDER,
             f"efg.order = {order} must be at most {MAX_TRIANGLE_ORDER} with efg.cells = "
             "\"delaunay\" (the highest triangle rule): lower it or use efg.cells = "

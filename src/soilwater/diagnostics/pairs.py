@@ -175,16 +175,21 @@ def slopes(table):
     return pd.DataFrame(rows)
 
 
-#: The report's EFG settings: the paper's weight pairs at two scale factors, and the
-#: flow-equation perturbation.
+#: The report's EFG settings: the paper's weight pairs at two scale factors with no
+#: pressure stabilisation, each stabilisation (the perturbation is the recommended
+#: configuration's), and nodal integration with and without the perturbation.
 REPORT_EFG = {f"{label}, scale {scale:g}": (f"efg.weight_u={u}", f"efg.weight_p={p}",
-                                            f"efg.scale_u={scale}", f"efg.scale_p={scale}")
+                                            f"efg.scale_u={scale}", f"efg.scale_p={scale}",
+                                            "efg.stabilisation=none")
               for label, (u, p) in {"Q/Q": ("quartic", "quartic"),
                                     "E-A/E-A": ("exp:0.5", "exp:0.5"),
                                     "E-A/E-B": ("exp:0.5", "exp:0.25")}.items()
               for scale in (1.3, 2.0)}
 REPORT_EFG.update({f"Q/Q, scale 1.3, {kind}": (f"efg.stabilisation={kind}",)
                    for kind in ("perturbation", "projection")})
+REPORT_EFG.update({f"Q/Q, scale 1.3, nodal, {kind}": ("efg.integration=nodal",
+                                                       f"efg.stabilisation={kind}")
+                   for kind in ("none", "perturbation")})
 
 
 def report_table(sizes=SIZES):
@@ -232,8 +237,9 @@ def _efg(case):
     return {"S": _efg_block(disc.su, disc.su, gram), "B": _efg_block(disc.sp, disc.su, div),
             "T": _efg_block(disc.sp, disc.sp, mass), "C": C,
             "free": None, "dirichlet": sla.block_diag(zero, zero),
-            "weights": f"{s.weight_u}/{s.weight_p}" + (
-                f"+{s.stabilisation}" if s.stabilisation != "none" else ""),
+            "weights": f"{s.weight_u}/{s.weight_p}" + "".join(
+                f"+{value}" for value in ("nodal" if s.integration == "nodal" else "none",
+                                          s.stabilisation) if value != "none"),
             "scale_u": s.scale_u, "scale_p": s.scale_p}
 
 

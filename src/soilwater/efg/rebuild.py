@@ -29,7 +29,8 @@ threshold of ``nodal``), :func:`rebuild`
 
 Each rebuild leaves a record (:func:`record`) on the new cells
 (:attr:`soilwater.efg.quadrature.Quadrature.rebuilds`), which the cells of every later step
-inherit: the run's history reports them.
+inherit, and in the run's statistics (``rebuild_records``): the history counts the
+rebuilds, the summary lists their records.
 """
 
 from dataclasses import replace
@@ -46,7 +47,7 @@ from soilwater.geometry.triangulation import close_boundary, conforms, delaunay_
 from soilwater.nonlinear.history import timed
 from soilwater.nonlinear.newton import newton
 
-#: The entries of a rebuild's record, in the run's history as ``rebuild_<entry>``.
+#: The entries of a rebuild's record (the run summary's ``rebuild_records``).
 RECORD = ("time", "quality_before", "quality_after", "out_of_balance_before",
           "out_of_balance_after", "iterations", "kept")
 
@@ -69,7 +70,8 @@ def rebuild(model, points, t, stats):
     t : float
         Time of ``points`` [s]: the boundary data the re-equilibration holds.
     stats : dict
-        The step's statistics (:func:`soilwater.nonlinear.newton.newton`'s), added to.
+        The step's statistics (:func:`soilwater.nonlinear.newton.newton`'s), added to;
+        a rebuild appends its :func:`record` to ``stats["rebuild_records"]``.
 
     Returns
     -------
@@ -109,6 +111,7 @@ def rebuild(model, points, t, stats):
         cells = lagrangian_cells(done.nodes, triangles, order)
     entry = record(t, old, cells, before, after, iterations, kept / len(triangles))
     done.cells = cells._replace(rebuilds=old.rebuilds + (entry,))
+    stats.setdefault("rebuild_records", []).append(entry)
     return done, iterations
 
 

@@ -158,9 +158,12 @@ QUARTIC_WEIGHT = Weight("quartic", QUARTIC)
 #: no pressure stabilisation. Method ``efg-paper`` runs it, to reproduce the paper.
 PAPER = {"integration": "paper", "essential": "penalty", "stabilisation": "none"}
 #: The recommended configuration, the defaults of :class:`EFGSettings` and of method
-#: ``efg``. Still the paper's: the measurements point to gauss, nitsche and
-#: perturbation, which becomes the default once every study runs both configurations.
-RECOMMENDED = {"integration": "paper", "essential": "penalty", "stabilisation": "none"}
+#: ``efg``: the state at the Gauss points of Lagrangian Delaunay cells (consistent and
+#: first order in dt), Nitsche's essential conditions (3-5 times closer to fem-th than
+#: penalty on the footing) and the flow-equation perturbation (the only pressure
+#: stabilisation that passes the inf-sup test on these points). The measurements behind
+#: the choice are in the docs' EFG theory page ("The recommended configuration").
+RECOMMENDED = {"integration": "gauss", "essential": "nitsche", "stabilisation": "perturbation"}
 #: The named configurations: the settings each fixes (the others are the case's).
 CONFIGURATIONS = {"recommended": RECOMMENDED, "paper": PAPER}
 
@@ -190,6 +193,36 @@ def configuration(settings):
         if all(getattr(settings, key) == value for key, value in values.items()):
             return name
     return "custom"
+
+
+def check(settings):
+    """Refuse the combinations of settings no EFG scheme can take, in one line each.
+
+    Checked when an EFG method starts to solve, not when a case loads, so that method
+    ``efg-paper`` can take a case written for the paper's scheme (``efg.cells =
+    "squares"``) whose defaults are the recommended ones.
+
+    Raises
+    ------
+    InputError
+        ``efg.cells = "squares"`` with a scheme other than ``paper`` (``gauss`` and
+        ``nodal`` integrate on the nodes' own triangles), or ``efg.stabilisation =
+        "projection"`` with ``nodal`` (one point per cell: nothing to project).
+
+    Examples
+    --------
+    >>> check(EFGSettings(integration="gauss", cells="squares"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    soilwater.errors.InputError: efg.cells = "squares" needs efg.integration = "paper" ...
+    """
+    require(settings.integration == "paper" or settings.cells == "delaunay",
+            f"efg.cells = \"{settings.cells}\" needs efg.integration = \"paper\" (the "
+            f"\"{settings.integration}\" scheme integrates on the nodes' own triangles): "
+            "use efg.cells = \"delaunay\" or method efg-paper")
+    require(settings.integration != "nodal" or settings.stabilisation != "projection",
+            "efg.stabilisation = \"projection\" has nothing to project with "
+            "efg.integration = \"nodal\" (one point per cell): use \"perturbation\"")
 
 
 def departures(settings, name="recommended"):

@@ -72,7 +72,8 @@ from soilwater.efg.essential.penalty import factors
 from soilwater.efg.mls import ShapeFunctions
 from soilwater.efg.model import Model, Points
 from soilwater.efg.quadrature import lagrangian_cells, nodal_average
-from soilwater.efg.rebuild import RECORD, rebuild
+from soilwater.efg.rebuild import rebuild
+from soilwater.efg.settings import check
 from soilwater.efg.smoothing import nodal_cells
 from soilwater.geometry.quality import cell_quality
 from soilwater.geometry.triangulation import delaunay_triangles
@@ -100,8 +101,10 @@ def solve(case, progress=True):
     ConvergenceError
         A step that still fails after ``MAX_CUTS`` halvings (the message names the time).
     InputError
-        Bad supports (too small a scale factor) and other invalid settings.
+        Bad supports (too small a scale factor), settings no scheme can take
+        (:func:`soilwater.efg.settings.check`) and other invalid settings.
     """
+    check(case.efg)
     model = Model.build(case)
     result = run(case, "efg", case.efg.to_dict(), _initial_points(model),
                  partial(_step, model), partial(_history_row, model),
@@ -110,7 +113,8 @@ def solve(case, progress=True):
                   "stabilisation_tau": model.tau,
                   **factors(model, case.times())}, progress)
     if model.gauss:
-        result.summary["rebuilds"] = int(result.history["rebuilds"].iloc[-1])
+        records = result.summary.setdefault("rebuild_records", [])
+        result.summary["rebuilds"] = len(records)
     return result
 
 
@@ -198,8 +202,9 @@ def _history_row(model, points, t, dt, info):
     step integrates on the very cells measured here (no cells are built twice); square cells
     stay squares (90 degrees, quality 1, quarter cells included). ``min_rcond`` is the
     step's (:func:`soilwater.efg.discretisation.min_rcond`; of the last substep of a level
-    that was cut back). With ``gauss``, the rebuilds' columns (:func:`_rebuild_columns`);
-    after a rebuild the cells measured are the new ones."""
+    that was cut back). With ``gauss``, ``rebuilds``: the cells' rebuilds so far (their
+    records are the summary's ``rebuild_records``); after a rebuild the cells measured
+    are the new ones."""
     case = model.case
     top = model.loop[model.edges == EDGES.index("top")]
     probes = ()
@@ -220,17 +225,8 @@ def _history_row(model, points, t, dt, info):
                       uniqueness=uniqueness, segments=segments, cells=points.cells.cells,
                       rcond=points.rcond)
     if model.gauss:
-        row.update(_rebuild_columns(points.cells.rebuilds))
+        row["rebuilds"] = len(points.cells.rebuilds)
     return row
-
-
-def _rebuild_columns(rebuilds):
-    """The history columns of the rebuilds of ``gauss`` (:mod:`soilwater.efg.rebuild`):
-    ``rebuilds``, their count so far, and ``rebuild_<entry>``, the last one's record
-    (:data:`soilwater.efg.rebuild.RECORD`; NaN before the first; read it where
-    ``rebuilds`` grows)."""
-    last = rebuilds[-1] if rebuilds else dict.fromkeys(RECORD, np.nan)
-    return {"rebuilds": len(rebuilds), **{f"rebuild_{k}": last[k] for k in RECORD}}
 
 
 def _snapshot(model, points, t):

@@ -28,6 +28,7 @@ from soilwater.efg.assembly import Pattern, elasticity_coefficients, scatter
 from soilwater.efg.boundary import (boundary_points, conditions, load_vector, penalty_coefficients,
                           segment_edges)
 from soilwater.efg.mls import ShapeFunctions
+from soilwater.efg.settings import check
 from soilwater.references.closed_forms import strain_from_stress
 from soilwater.material.kinematics import cauchy_traction
 from soilwater.errors import InputError
@@ -46,8 +47,10 @@ def solve(case):
     Raises
     ------
     InputError
-        If the material is not elastic.
+        If the material is not elastic, or the settings are a combination no scheme can
+        take (:func:`soilwater.efg.settings.check`).
     """
+    check(case.efg)
     material = case.material()
     if material.plastic:
         raise InputError(f"case {case.name!r}: static EFG elasticity needs material.model "

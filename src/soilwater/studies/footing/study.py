@@ -5,14 +5,16 @@ and at what cost.
 The built-in ``strip-footing`` case (footing width B = 1 m, symmetry half, weightless
 normally consolidated Cam-clay, k = 0, 10 B x 10 B) is run by each method of
 :data:`METHODS` on the three node densities of :data:`DENSITIES` (the built-in layout
-refined, :func:`soilwater.studies.harness.grids.refined`) to a settlement of 0.5 B, and EFG
-also with more time steps on the coarsest nodes (:data:`EFG_STEPS`). ``s_u`` is the clay's
+refined, :func:`soilwater.studies.harness.grids.refined`) to a settlement of 0.5 B, and the
+paper's EFG configuration also with more time steps on the coarsest nodes
+(:data:`EFG_STEPS`), the evidence that its pressure depends on the step count. ``s_u`` is the clay's
 plane-strain undrained strength
 (:func:`soilwater.references.closed_forms.undrained_strength`). The reference curve is
 that of :data:`REFERENCE`, the finest Taylor-Hood run; a run's error is its largest
 relative distance from it. The node set distorts as a mesh would: each triangle of the
-initial nodes (FEM: its elements; EFG: the Delaunay triangles of its initial nodes, which
-it does not integrate on, since it re-triangulates every step) is distorted once its
+initial nodes (FEM: its elements; EFG: the Delaunay triangles of its initial nodes moved
+with them, which ``efg`` integrates on until it rebuilds them and ``efg-paper`` does not,
+since it re-triangulates every step) is distorted once its
 smallest angle falls below :data:`soilwater.geometry.quality.DISTORTED` of its undeformed value.
 """
 
@@ -28,12 +30,16 @@ from soilwater.studies.harness.runs import solved
 from soilwater.references.closed_forms import PRANDTL, undrained_strength
 from soilwater.case.loader import load_case
 from soilwater.geometry.quality import DISTORTED
+from soilwater.methods import EFG_METHODS
 
 #: Equal spacings per B at the footing (:func:`soilwater.studies.harness.grids.refined`);
 #: the middle one is the built-in case's.
 DENSITIES = (4, 8, 12)
-#: Time steps to 0.5 B of EFG's extra runs on the coarsest nodes (the case has 100).
+#: Time steps to 0.5 B of the extra runs of :data:`STEPPED` on the coarsest nodes (the
+#: case has 100).
 EFG_STEPS = (200, 400)
+#: The method whose step-count dependence the extra runs show: the paper's scheme.
+STEPPED = "efg-paper"
 #: Settlement [B] to which every method is pushed on the built-in nodes (at the built-in
 #: step), to see how far it gets.
 DEEP = 1.0
@@ -57,7 +63,7 @@ def family(labels):
 
 def meshless(labels):
     """Whether each run label is an EFG run (any :data:`METHODS` entry solved by EFG)."""
-    return family(labels).map(lambda f: METHODS[f][0] == "efg")
+    return family(labels).map(lambda f: METHODS[f][0] in EFG_METHODS)
 
 
 def runs(methods=METHODS, densities=DENSITIES, efg_steps=EFG_STEPS, deep=DEEP):
@@ -70,7 +76,7 @@ def runs(methods=METHODS, densities=DENSITIES, efg_steps=EFG_STEPS, deep=DEEP):
     middle = densities[len(densities) // 2]
     out = [(label, method, core, steps, (*refined(core), *extra))
            for label, (method, extra) in methods.items() for core in densities]
-    out += [(f"efg, {n} steps", "efg", densities[0], n,
+    out += [(f"{STEPPED}, {n} steps", STEPPED, densities[0], n,
              (*refined(densities[0]), f"time.steps={n}")) for n in efg_steps]
     factor = deep / 0.5
     return out + [(f"{label}, to {deep:g} B", method, middle, steps,
@@ -265,7 +271,7 @@ def section(summary):
     at = f"at_{AT:g}B"
     base = summary[summary.label.isin(list(METHODS))]
     by = base.set_index(["label", "nodes"])
-    efg = summary[(family(summary.label) == "efg") & (summary.to == summary.to.min())]
+    efg = summary[(family(summary.label) == STEPPED) & (summary.to == summary.to.min())]
     deep = summary[summary.to > summary.to.min()]
     coarse = efg[efg.nodes == efg.nodes.iloc[0]].sort_values("steps")
     stops = summary[summary.reached < summary.to - 1e-9]
@@ -279,8 +285,10 @@ def section(summary):
         "into a weightless normally consolidated Cam-clay layer (Table 1, p'0 = 3 kPa, "
         "undrained, total stress zero at the start), 10 B wide and 10 B deep, to a "
         "settlement of 0.5 B in 100 steps (`soilwater run strip-footing --method "
-        "METHOD`; `efg+nitsche` is EFG with `--set efg.essential=nitsche`, Nitsche's "
-        "essential conditions in place of the paper's penalty; `fem-th+remesh` is fem-th "
+        "METHOD`; `efg` is EFG's recommended configuration, material state at the Gauss "
+        "points of Lagrangian cells, Nitsche's essential conditions and the pressure "
+        "perturbation; `efg-paper` the paper's, state on the nodes, penalty, no "
+        "stabilisation; `fem-th+remesh` is fem-th "
         "with `--set fem.remesh=delaunay`), and on "
         f"the built-in nodes to {DEEP:g} B at the same step. Nodes: equal spacings of B/n "
         "within B of the footing, growing to 4 "
@@ -310,7 +318,7 @@ def section(summary):
         f"At {AT:g} B the pressure over (2 + pi) s_u is, from the coarsest to the finest "
         "nodes: " + "; ".join(
             f"{label} " + ", ".join(f"{v:.3g}" for v in group[at])
-            for label, group in base.groupby("label", sort=False)) + ". EFG on the "
+            for label, group in base.groupby("label", sort=False)) + f". {STEPPED} on the "
         "coarsest nodes with " + ", ".join(map(str, coarse.steps)) + " steps: "
         + ", ".join(f"{v:.3g}" for v in coarse[at])
         + " (by `tests/test_footing.py`, not this run: on 11 x 11 nodes fem-th's pressure "
@@ -348,7 +356,8 @@ def verdict(summary, table):
     deep = deep.set_index(family(deep.label))
     base = summary[summary.label.isin(list(METHODS))]
     variants = base[meshless(base.label)]
-    fixed = [m for m, (method, extra) in METHODS.items() if method != "efg" and not extra]
+    fixed = [m for m, (method, extra) in METHODS.items()
+             if method not in EFG_METHODS and not extra]
     fem = base[base.label.isin(fixed)]
     th = fem[fem.label == REFERENCE[0]].set_index("nodes")
     efg = variants.set_index(["label", "nodes"])

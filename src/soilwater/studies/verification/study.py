@@ -18,14 +18,22 @@ from soilwater.case.loader import load_case
 
 #: The paper's weights: quartic (Q), exponential c = 0.5 (E-A) and c = 0.25 (E-B).
 WEIGHTS = {"Q": "quartic", "E-A": "exp:0.5", "E-B": "exp:0.25"}
-CELLS = ("delaunay", "squares")
+#: The integration cells of the EFG core's tables: Delaunay triangles of the nodes (the
+#: cells of ``gauss``, and of ``paper`` with ``efg.cells = "delaunay"``: one solve, the
+#: same cells), the paper's squares, and the smoothing cells of nodal integration.
+CELLS = {"delaunay": ("efg.integration=gauss",),
+         "squares": ("efg.integration=paper", "efg.cells=squares"),
+         "nodal": ("efg.integration=nodal",)}
+#: The essential conditions of these tables: the paper's penalty (Nitsche's are the
+#: essential-conditions study's).
+ESSENTIAL = "efg.essential=penalty"
 
 
-def patch_test(corrections=("vci", "none"), cells=CELLS):
-    """Relative errors of the linear patch test for each cell type and correction."""
+def patch_test(corrections=("vci", "none"), cells=tuple(CELLS)):
+    """Relative errors of the linear patch test for each of :data:`CELLS` and correction."""
     rows = []
     for cell, correction in itertools.product(cells, corrections):
-        result = solve(load_case("patch-test", [f"efg.cells={cell}",
+        result = solve(load_case("patch-test", [*CELLS[cell], ESSENTIAL,
                                                 f"efg.correction={correction}"]))
         rows.append({"cells": cell, "correction": correction,
                      "order": result.options["order"], **result.summary["errors"]})
@@ -33,7 +41,8 @@ def patch_test(corrections=("vci", "none"), cells=CELLS):
 
 
 def cantilever_convergence(levels=((13, 4), (25, 7), (49, 13), (97, 25)),
-                           weights=WEIGHTS, cells=CELLS, corrections=("vci",)):
+                           weights=WEIGHTS, cells=("delaunay", "squares"),
+                           corrections=("vci",)):
     """Energy-norm error of the Timoshenko cantilever under refinement.
 
     Returns
@@ -50,8 +59,8 @@ def cantilever_convergence(levels=((13, 4), (25, 7), (49, 13), (97, 25)),
         for nx, ny in levels:
             case = load_case("cantilever", [f"discretisation.nx={nx}",
                                             f"discretisation.ny={ny}",
-                                            f"efg.weight_u={weight}", f"efg.cells={cell}",
-                                            f"efg.correction={correction}"])
+                                            f"efg.weight_u={weight}", *CELLS[cell],
+                                            ESSENTIAL, f"efg.correction={correction}"])
             errors = solve(case).summary["errors"]
             h = case.spacing[0]
             rate = (np.log(previous[1] / errors["energy"]) / np.log(previous[0] / h)
