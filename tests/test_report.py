@@ -212,3 +212,19 @@ def test_importing_the_studies_leaves_the_matplotlib_backend_alone():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env=env, check=True).stdout
     assert out.strip() == "svg"
+
+
+def test_a_section_older_code_saved_asks_for_a_rerun_and_todays_errors_raise():
+    """Output saved by older code that today's section cannot read gives one line
+    naming the rerun, in place of a traceback; today's own output is never hidden."""
+    from soilwater.studies.report import _readable
+
+    def broken():
+        raise KeyError("method")
+
+    lines = _readable(broken, False, "## footing", "section `footing`", "footing")
+    assert lines[0] == "## footing"
+    assert "rerun `soilwater report --only footing`" in lines[2]
+    assert _readable(lambda: ["ok"], False, "## x", "x", "x") == ["ok"]
+    with pytest.raises(KeyError):
+        _readable(broken, True, "## footing", "section `footing`", "footing")

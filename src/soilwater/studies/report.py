@@ -103,15 +103,32 @@ def markdown(saved, hashes):
             lines += [f"## {name}", "", f"*Study `{name}` has not been run yet: "
                       f"`soilwater report --only {name}`.*", ""]
             continue
-        lines += [*study.load().section(saved[name].data),
+        fresh = saved[name].meta["code"] == hashes[name]
+        lines += [*_readable(lambda: study.load().section(saved[name].data), fresh,
+                             f"## {name}", f"section `{name}`", name),
                   provenance(name, saved[name], hashes[name]), ""]
-    lines += verdicts.section({n: s.data for n, s in saved.items() if s is not None})
     stale = [n for n in verdicts.NEEDS
              if saved.get(n) is not None and saved[n].meta["code"] != hashes[n]]
+    lines += _readable(
+        lambda: verdicts.section({n: s.data for n, s in saved.items() if s is not None}),
+        not stale, "## Verdicts on the paper's claims", "the verdicts", ",".join(stale))
     if stale:
         lines += [f"**Stale**: the verdicts read sections made from older code "
                   f"({', '.join(stale)}).", ""]
     return "\n".join(lines + DIFFERENCES)
+
+
+def _readable(render, fresh, title, what, rerun):
+    """``render()``'s lines; for output saved by older code that today's cannot read (a
+    table without a column it now needs), a title and one line asking for the rerun in
+    place of a traceback. Output of today's code is always rendered (its errors raise)."""
+    if fresh:
+        return render()
+    try:
+        return render()
+    except (KeyError, IndexError, ValueError, AttributeError, TypeError):
+        return [title, "", f"*{what.capitalize()} cannot be written from output saved by "
+                f"older code: rerun `soilwater report --only {rerun}`.*", ""]
 
 
 def _header(saved):
