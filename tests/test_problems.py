@@ -384,3 +384,18 @@ def test_small_support_message_names_the_scale_key():
     assert "scale factor 0.3 from efg.scale_p;" in str(info.value)
     with pytest.raises(InputError, match="scale factor 0.3 from efg.scale_u;"):
         ShapeFunctions.build(nodes, nodes + 0.25, "quartic", 0.3)
+
+
+def test_the_schema_shows_the_efg_defaults():
+    """The ``[efg]`` block of the schema's documentation, read as TOML, holds exactly
+    the defaults of :class:`soilwater.efg.settings.EFGSettings`."""
+    import tomllib
+
+    from soilwater.case import schema
+    from soilwater.efg.settings import EFGSettings
+
+    doc = schema.__doc__
+    start = doc.index("[efg]")
+    block = doc[start:doc.index("[fem]", start)]
+    shown = tomllib.loads("\n".join(line.strip() for line in block.splitlines()))["efg"]
+    assert shown == EFGSettings().to_dict()

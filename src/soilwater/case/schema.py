@@ -132,10 +132,10 @@ Schema (every case has the same one; unknown keys are an error)::
                                       # 1 <= scale <= 1000
     weight_p = "quartic"              # the same for the pore pressure p_w
     scale_p = 1.3
-    integration = "paper"             # where the material state lives: "paper" (nodes,
-                                      # MLS-interpolated to cells rebuilt each step),
-                                      # "gauss" (Gauss points of Delaunay triangles
-                                      # moved with the nodes) or "nodal"
+    integration = "gauss"             # where the material state lives: "gauss" (Gauss
+                                      # points of Delaunay triangles moved with the
+                                      # nodes), "paper" (nodes, MLS-interpolated to cells
+                                      # rebuilt each step: the paper's) or "nodal"
                                       # (the nodes: stabilised conforming nodal
                                       # integration on median-dual cells)
     rebuild_quality = 0.3             # "nodal" and "gauss" re-triangulate below this
@@ -143,14 +143,14 @@ Schema (every case has the same one; unknown keys are an error)::
     cells = "delaunay"                # background cells: delaunay or squares ("paper")
     order = 2                         # Gauss order (squares: per direction; triangles:
                                       # degree, at most 19)
-    essential = "penalty"             # essential conditions: "penalty" or "nitsche"
+    essential = "nitsche"             # essential conditions: "nitsche" or "penalty"
                                       # (soilwater.efg.essential.nitsche: consistent,
                                       # no factor to choose, a matrix on the
                                       # stiffness's scale)
     penalty = 1e6                     # penalty factor relative to the stiffness scale
                                       # (essential = "penalty")
     correction = "vci"                # consistent test gradients (soilwater.efg.vci) or "none"
-    stabilisation = "none"            # or "perturbation": the flow-equation term
+    stabilisation = "perturbation"    # or "none"; "perturbation": the flow-equation term
                                       # -h^2/(4M) int grad(p - p_n) . grad(q) of
                                       # fem-p1p1-stab on the MLS pressure; or
                                       # "projection": -(1/G) int (dp - Pi dp)(q - Pi q),
