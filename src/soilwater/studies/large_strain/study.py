@@ -280,7 +280,7 @@ def profile_figure(table, name, path):
     quantities = (("e", "void ratio e", False), ("p_eff", "p' [kPa]", False),
                   ("k", "permeability k [m/s]", True), ("p_w", "excess p_w [kPa]", False))
     fig, axes = plt.subplots(1, 4, figsize=(13, 4.5), sharey=True, constrained_layout=True)
-    markers = ("o", "s", "^")
+    markers = ("o", "s", "^", "D")
     ref = runs[runs.method == METHODS[1]]
     for q, (column_, label, log) in enumerate(quantities):
         ax = axes[q]
