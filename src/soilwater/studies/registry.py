@@ -15,6 +15,7 @@ STUDIES = {study.name: study for study in (
     Study("consolidation", "soilwater.studies.consolidation.report"),
     Study("footing", "soilwater.studies.footing.report"),
     Study("footing-domain", "soilwater.studies.footing.domain_report"),
+    Study("footing-fair", "soilwater.studies.footing_fair.report"),
     Study("footing-consolidation", "soilwater.studies.footing_consolidation.report"),
     Study("footing-pictures", "soilwater.studies.footing.pictures_report"),
     Study("shearband", "soilwater.studies.shearband.report"),
