@@ -268,3 +268,19 @@ def test_bad_input_is_one_line(capsys):
         script("krylov_runs").main(["--set", "time.steps=-1"])
     assert stopped.value.code == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_coarse_pressure_reduces_the_pressure_unknowns_and_restores_the_solver():
+    locking = script("locking")
+    out = script("coarse_pressure").main(["--core", "2", "--steps", "2",
+                                          "--spacings", "1", "2"])
+    assert len(out) == (1 + 2 * 2) + 3 * (1 + 2)
+    for row in out:
+        assert row["reached"] and row["failed"] is None, row
+        assert positive(row["pressure"]), row
+    efg = [row for row in out if "fem-th" not in row["method"]]
+    assert {row["p"] for row in efg if row["s"] == 1} == {100}
+    assert all(25 <= row["p"] < 50 for row in efg if row["s"] == 2), efg
+    own = locking.run(2, 2, "efg", "gauss")          # the package's solver, unpatched
+    first = next(row for row in efg if row["variant"] == "undrained penalty")
+    assert first["pressure"] == pytest.approx(own["pressure"], rel=1e-6)

@@ -61,8 +61,7 @@ def _reduction(P, n, extra):
 
 def _build(cls, case):
     model = _ORIGINAL["build"](cls, case)
-    model.coarse = (None if SPACING["s"] <= 1
-                    else subset(case.nodes(), model.loop, SPACING["s"]))
+    model.coarse = subset(case.nodes(), model.loop, SPACING["s"])
     return model
 
 
@@ -108,8 +107,14 @@ def _advance(self, dx):
 
 def use(spacing):
     """Patch the EFG solver to carry the pore pressure's unknowns on a subset
-    ``spacing`` node spacings apart (1: the package's own solver)."""
+    ``spacing`` node spacings apart; ``use(1)`` puts the package's own solver back."""
     SPACING["s"] = spacing
+    if spacing <= 1:
+        Model.build = classmethod(_ORIGINAL["build"])
+        for name in ("init", "residual", "tangent", "advance"):
+            setattr(system.System, f"__{name}__" if name == "init" else name,
+                    _ORIGINAL[name])
+        return
     Model.build = classmethod(_build)
     system.System.__init__, system.System.residual = _init, _residual
     system.System.tangent, system.System.advance = _tangent, _advance
@@ -140,6 +145,7 @@ def main(argv=None):
         r["method"] = f"{r['method']} s={r['s']}"
     locking.show("Pore pressure's unknowns on a subset s spacings apart (fem-th's p: its "
                  "vertices)", rows, lambda r: f"{r['variant']} {r['method']}")
+    return rows
 
 
 if __name__ == "__main__":
