@@ -260,9 +260,9 @@ def verdict(paired):
 
 
 def figure(table, ref, path):
-    """Load-settlement curves, smooth and rough side by side: each method's finest run
-    and Taylor-Hood's densities, the Richardson reference with its error bar, the
-    embedded-footing trend."""
+    """Load-settlement curves, smooth and rough side by side: every run (each method's
+    finest solid), where a run stops marked with a cross in its panel, the Richardson
+    reference with its error bar, the embedded-footing trend."""
     fig, axes = plt.subplots(1, len(ROUGHNESS), figsize=(12.8, 5.6), sharey=True,
                              constrained_layout=True, squeeze=False)
     styles = {"efg": ("C0", "-"), "efg-paper": ("C1", "-"), "fem-p1p1-stab": ("C2", "-"),
@@ -273,9 +273,11 @@ def figure(table, ref, path):
             color, _ = styles.get(method, ("k", "-"))
             finest = core == max(SIZES[method])
             label = f"{method}, {run.nodes.iloc[0]} nodes, {run.u_unknowns.iloc[0]} u"
-            if run.reached.iloc[0] < TO - 1e-9:
-                label += f", stops {run.reached.iloc[0]:.2f} B"
-                ax.plot(run.settlement.iloc[-1], run.pressure.iloc[-1], "x", color=color)
+            if run.reached.iloc[0] < TO - 1e-9:     # the panel's own stops, marked
+                end = (run.settlement.iloc[-1], run.pressure.iloc[-1])
+                ax.plot(*end, "x", color=color, ms=8)
+                ax.annotate(f"stops {end[0]:.2f} B", end, fontsize=7, color=color,
+                            textcoords="offset points", xytext=(4, -10))
             ax.plot(run.settlement, run.pressure, "-" if finest else "--", color=color,
                     lw=1.6 if finest else 1.0, alpha=1.0 if finest else 0.7, label=label)
         r = ref[ref.roughness == rough]
@@ -342,7 +344,10 @@ def section(summary, ref, paired):
         "bearing pressure of a rough footing wished into weightless Tresca clay at that "
         "depth (Salgado et al. 2004), a check of the trend only: the pushed footing's "
         "clay heaves beside it, nothing acts on its sides, and Cam-clay reaches s_u "
-        "only at critical state. Pressures over Prandtl's (2 + pi) s_u.",
+        "only at critical state. Pressures over Prandtl's (2 + pi) s_u. Taylor-Hood's "
+        "errors are against an extrapolation of its own runs, which favours it where its "
+        "runs share an error the extrapolation cannot see (the fixed mesh's); where "
+        "they do not converge there is no error for any method.",
         "",
         tables.to_markdown(ref, floatfmt="{:.4g}"),
         "",
