@@ -157,9 +157,9 @@ def reference(table, levels=LEVELS, method=REFERENCE):
     (:func:`embedded` at that depth)."""
     rows = []
     for rough, group in table[table.method == method].groupby("roughness", sort=False):
-        runs = [run for _, run in sorted(group.groupby("core"))]
+        ordered = [run for _, run in sorted(group.groupby("core"))]
         for level in levels:
-            p = [_at(run, level) for run in runs]
+            p = [_at(run, level) for run in ordered]
             estimate, order, error = richardson(*p[-3:])
             rows.append({"roughness": rough, "settlement": level, "coarse": p[-3],
                          "middle": p[-2], "fine": p[-1], "reference": estimate,
@@ -265,12 +265,11 @@ def figure(table, ref, path):
     reference with its error bar, the embedded-footing trend."""
     fig, axes = plt.subplots(1, len(ROUGHNESS), figsize=(12.8, 5.6), sharey=True,
                              constrained_layout=True, squeeze=False)
-    styles = {"efg": ("C0", "-"), "efg-paper": ("C1", "-"), "fem-p1p1-stab": ("C2", "-"),
-              "fem-th": ("C3", "-")}
+    colors = {method: f"C{k}" for k, method in enumerate(SIZES)}
     for ax, rough in zip(axes[0], ROUGHNESS):
-        runs = table[table.roughness == rough]
-        for (method, core), run in runs.groupby(["method", "core"], sort=False):
-            color, _ = styles.get(method, ("k", "-"))
+        panel = table[table.roughness == rough]
+        for (method, core), run in panel.groupby(["method", "core"], sort=False):
+            color = colors.get(method, "k")
             finest = core == max(SIZES[method])
             label = f"{method}, {run.nodes.iloc[0]} nodes, {run.u_unknowns.iloc[0]} u"
             if run.reached.iloc[0] < TO - 1e-9:     # the panel's own stops, marked
