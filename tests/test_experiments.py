@@ -284,3 +284,17 @@ def test_coarse_pressure_reduces_the_pressure_unknowns_and_restores_the_solver()
     own = locking.run(2, 2, "efg", "gauss")          # the package's solver, unpatched
     first = next(row for row in efg if row["variant"] == "undrained penalty")
     assert first["pressure"] == pytest.approx(own["pressure"], rel=1e-6)
+
+
+def test_footing_edge_fits_force_against_width_for_both_methods():
+    out = script("footing_edge").main(["--cores", "2", "--widths", "1", "2", "--steps", "2"])
+    runs = [row for row in out if "force" in row]
+    assert [(r["method"], r["a"]) for r in runs] == [
+        ("fem-th", 0.5), ("fem-th", 1.0), ("efg", 0.5), ("efg", 1.0)]
+    for method in ("fem-th", "efg"):
+        narrow, wide = (r["force"] for r in runs if r["method"] == method)
+        assert 0 < narrow < wide, runs                 # a wider footing carries more
+    (fit,) = [row for row in out if "fits" in row]
+    assert positive(fit["radius"]) and fit["h"] == 0.5
+    for slope, delta in fit["fits"].values():
+        assert positive(slope) and math.isfinite(delta)
