@@ -2,6 +2,8 @@
 nothing deleted that soilwater did not write."""
 
 import errno
+import os
+import re
 import signal
 import subprocess
 import sys
@@ -207,7 +209,7 @@ def test_a_signal_swallowed_by_a_library_is_still_one_line(tmp_path, monkeypatch
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="needs Linux /proc")
 def test_sigterm_during_a_run_is_one_line_and_leaves_nothing(tmp_path):
     cmd = [sys.executable, "-m", "soilwater.cli", "run", "unconfined-compression",
-           "--method", "efg", "--out", "run", "--set", "time.steps=400"]  # ~30 s
+           "--method", "efg", "--out", "run", "--set", "time.steps=400", "--quiet"]  # ~30 s
     proc = subprocess.Popen(cmd, cwd=tmp_path, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 30
     while not _handles_sigterm(proc.pid) and time.monotonic() < deadline:
@@ -232,18 +234,18 @@ def test_stdout_closed_early_is_silent(tmp_path):
 
 @pytest.mark.parametrize("error,status,text", [
     (OSError(errno.ENOSPC, "No space left on device", "fields_0000.vtu"), 2,
-     "soilwater: error: fields_0000.vtu: No space left on device"),
-    (PermissionError(errno.EACCES, "Permission denied"), 2,
-     "soilwater: error: Permission denied"),
+     r"soilwater: error: fields_0000\.vtu: No space left on device"),
+    (PermissionError(errno.EACCES, "Permission denied"), 2,  # names no file: given one
+     r"soilwater: error: .*/\.run\.\w+\.tmp/fields_0000\.vtu: Permission denied"),
     (Interrupted(signal.SIGTERM), 143,
-     "soilwater: interrupted (SIGTERM): no half-written output was left"),
+     r"soilwater: interrupted \(SIGTERM\): no half-written output was left"),
 ])
 def test_a_failing_write_is_one_line_and_keeps_the_previous_result(
         tmp_path, monkeypatch, capsys, error, status, text):
     import meshio
 
     monkeypatch.chdir(tmp_path)
-    args = ["run", "patch-test", "--method", "efg", "--out", "run"]
+    args = ["run", "patch-test", "--method", "efg", "--out", "run", "--quiet"]
     assert main(args) == 0
     before = _contents(tmp_path)
     capsys.readouterr()
@@ -253,7 +255,8 @@ def test_a_failing_write_is_one_line_and_keeps_the_previous_result(
 
     monkeypatch.setattr(meshio, "write", fail)
     assert main(args) == status
-    assert capsys.readouterr().err.strip().splitlines() == [text]
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and re.fullmatch(text, lines[0]), lines
     assert _contents(tmp_path) == before
 
 
@@ -278,3 +281,82 @@ def test_path_refuses_a_folder_as_its_csv_file(tmp_path, capsys):
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and str(tmp_path) in lines[0] and "is a folder" in lines[0]
     assert _contents(tmp_path) == {Path("old.csv"): b"kept"}
+
+
+_PATH = ["path", "table1", "--test", "oedometer", "--strain", "0.05", "--points", "5"]
+
+
+def test_path_refuses_a_file_it_did_not_write_and_replaces_its_own(tmp_path, capsys):
+    notes = tmp_path / "notes.txt"
+    notes.write_text("my notes")
+    assert main(_PATH + ["--out", str(notes)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and str(notes) in lines[0] and "did not write" in lines[0]
+    assert notes.read_text() == "my notes"
+    out = tmp_path / "path.csv"
+    assert main(_PATH + ["--out", str(out)]) == 0
+    assert main(_PATH[:5] + ["0.1"] + _PATH[6:] + ["--out", str(out)]) == 0  # replaced
+    assert pd.read_csv(out).eps_a.iloc[-1] == pytest.approx(0.1)
+
+
+def test_path_writes_through_no_symbolic_link(tmp_path, capsys):
+    target = tmp_path / "target.csv"
+    target.write_text("kept")
+    link = tmp_path / "link.csv"
+    link.symlink_to(target)
+    for out in (link, Path("/dev/stdout")):
+        assert main(_PATH + ["--out", str(out)]) == 2
+        lines = capsys.readouterr().err.strip().splitlines()
+        assert len(lines) == 1 and "symbolic link" in lines[0] and str(out) in lines[0]
+    assert link.is_symlink() and target.read_text() == "kept"
+
+
+def test_an_out_under_a_file_fails_before_solving(tmp_path, monkeypatch, capsys):
+    from soilwater.methods import METHODS
+
+    (tmp_path / "mydata.txt").write_text("mine")
+    monkeypatch.setitem(METHODS, "efg", lambda *a, **k: pytest.fail("solver called"))
+    for args in (["run", "strip-footing", "--method", "efg"], _PATH):
+        assert main(args + ["--out", str(tmp_path / "mydata.txt" / "sub")]) == 2
+        lines = capsys.readouterr().err.strip().splitlines()
+        assert len(lines) == 1 and f"{tmp_path / 'mydata.txt'} is a file" in lines[0]
+    assert _contents(tmp_path) == {Path("mydata.txt"): b"mine"}
+
+
+def test_result_files_take_the_users_umask(tmp_path):
+    previous = os.umask(0o027)
+    try:
+        assert main(["run", "patch-test", "--method", "efg", "--quiet",
+                     "--out", str(tmp_path / "run")]) == 0
+        assert main(_PATH + ["--out", str(tmp_path / "path.csv")]) == 0
+    finally:
+        os.umask(previous)
+    modes = {p.name: p.stat().st_mode & 0o777 for p in tmp_path.rglob("*")}
+    assert modes["run"] == 0o750 and modes["history.csv"] == 0o640
+    assert modes["path.csv"] == 0o640
+
+
+def test_a_full_disk_names_the_file(tmp_path, monkeypatch, capsys):
+    import pandas
+
+    def full(self, *args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")  # as a write reports it
+
+    monkeypatch.setattr(pandas.DataFrame, "to_csv", full)
+    out = tmp_path / "path.csv"
+    assert main(_PATH + ["--out", str(out)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"soilwater: error: {out}: No space left on device"]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_progress_without_a_terminal_is_plain_lines_and_quiet_silences_it(tmp_path,
+                                                                         capsys):
+    args = ["run", "terzaghi", "--method", "efg", "--set", "time.steps=40"]
+    assert main(args + ["--out", str(tmp_path / "a")]) == 0
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert 20 <= len(lines) <= 22 and lines[0].startswith("efg terzaghi: step 1/40, t = ")
+    assert re.fullmatch(r"efg terzaghi: step 40/40, t = \S+ s, \d+ Newton iterations, 0 "
+                        r"cut-backs, \d+ s elapsed, about 0 s left", lines[-1]), lines[-1]
+    assert main(args + ["--out", str(tmp_path / "b"), "--quiet"]) == 0
+    assert capsys.readouterr().err == ""

@@ -162,6 +162,9 @@ def _parser():
     p.add_argument("--method", required=True, choices=list(METHODS), help="solver")
     p.add_argument("--out", required=True, metavar="DIR",
                    help="result folder: new, empty or a previous result")
+    p.add_argument("--quiet", action="store_true", help="no progress (by default a bar "
+                   "on a terminal, else a line every few steps on stderr: step, time, "
+                   "Newton iterations, cut-backs, elapsed and estimated time left)")
     p.set_defaults(func=_run)
 
     p = sub.add_parser("path", help="stress-point driver: a material under a named test",
@@ -259,7 +262,7 @@ def _run(args):
 
     check_output_folder(args.out)  # before any work: a bad --out fails at once
     case = load_case(args.case, args.set)
-    result = solve(case, args.method)
+    result = solve(case, args.method, progress=not args.quiet)
     result.write(args.out)
     print(f"wrote {args.out}: {json_line(result.summary)}")
 
@@ -274,10 +277,11 @@ def json_line(summary):
 
 
 def _path(args):
-    from soilwater.material.driver import run_test
+    from soilwater.material.driver import PATH_COLUMNS, run_test
     from soilwater.material.presets import load_material
-    from soilwater.results import write_csv
+    from soilwater.results import check_output_file, write_csv
 
+    check_output_file(args.out, PATH_COLUMNS)  # before any work
     material = load_material(args.material, model=args.model, ocr=args.ocr)
     if not material.plastic:
         raise SoilwaterError(f"material {args.material!r} is elastic: the driver runs "

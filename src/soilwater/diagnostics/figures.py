@@ -2,6 +2,8 @@
 
 import matplotlib.pyplot as plt
 
+from soilwater.results import SOFTWARE
+
 
 def infsup(table, slopes, path):
     """Inf-sup value beta against the nodal spacing h (log-log), one line per pair and
@@ -28,6 +30,6 @@ def infsup(table, slopes, path):
     axes[0, 0].set_ylabel("inf-sup value beta")
     fig.suptitle("Numerical inf-sup test (Chapelle and Bathe): solid lines level off "
                  "(stable), dashed lines decay", fontsize=10)
-    fig.savefig(path, dpi=150)
+    fig.savefig(path, dpi=150, format="png", metadata={"Software": SOFTWARE})
     plt.close(fig)
     return path

@@ -90,19 +90,25 @@ def write(out, methods, sizes=SIZES, boundaries=BOUNDARIES, overrides=()):
         The CSV and the figure.
     """
     from soilwater.diagnostics import figures as stability_figures
-    from soilwater.results import write_csv
+    from soilwater.results import check_output_file, naming, publish, write_csv
 
     out = Path(out)
     require(out.suffix == ".csv", f"--out {out}: name a CSV file, e.g. infsup.csv")
-    table = measure(methods, sizes, boundaries, overrides, progress=True)
     figure = out.with_suffix(".png")
-    figure.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=figure.parent, prefix=f".{figure.name}.", suffix=".png")
-    os.close(fd)
+    out, figure = check_output_file(out, COLUMNS), check_output_file(figure)
+    table = measure(methods, sizes, boundaries, overrides, progress=True)
+    with naming(figure):
+        figure.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=figure.parent, prefix=f".{figure.name}.",
+                                   suffix=".png")
+        os.close(fd)
     try:
-        stability_figures.infsup(table, slopes(table), tmp)
+        with naming(figure):
+            stability_figures.infsup(table, slopes(table), tmp)
+            publish(tmp)
         write_csv(table, out)
-        os.replace(tmp, figure)
+        with naming(figure):
+            os.replace(tmp, figure)
     finally:
         Path(tmp).unlink(missing_ok=True)
     return [out, figure]

@@ -291,8 +291,12 @@ def closed_form_q(clay, p):
     return p * np.sqrt(M**2 * (clay.ocr * (clay.p0 / p) ** (1 / L) - 1))
 
 
+#: Columns of the ``soilwater path`` table (:func:`path_table`).
+PATH_COLUMNS = ("step", "eps_a", "eps_v", "p", "q", "pc")
+
+
 def path_table(raw, shear=False):
-    """Reduce a raw :func:`integrate` table to ``step, eps_a, eps_v, p, q, pc``."""
+    """Reduce a raw :func:`integrate` table to :data:`PATH_COLUMNS`."""
     p, q = invariants(raw[["sxx", "syy", "szz", "sxy"]].to_numpy())
     return pd.DataFrame({
         "step": np.arange(len(raw)),

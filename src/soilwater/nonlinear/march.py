@@ -15,12 +15,11 @@ import time
 
 import numpy as np
 import pandas as pd
-from tqdm import tqdm
-
 from soilwater.errors import ConvergenceError
 from soilwater.linalg.backends import identity
 from soilwater.nonlinear.history import TIMERS
 from soilwater.nonlinear.newton import TOLERANCE, new_counts
+from soilwater.nonlinear.progress import Progress
 from soilwater.results import Result
 
 #: Halvings of a failing time step before the run stops.
@@ -90,6 +89,11 @@ def march(case, current, step, row, snapshot, stats, progress=True, desc=""):
         the rows carry the uniqueness indicator (``diagnostics.uniqueness``),
         ``uniqueness_onset_step``: the first step (from 1) whose indicator is not
         positive, None if there is none.
+    progress : bool
+        Show the march's progress (:class:`soilwater.nonlinear.progress.Progress`: a bar
+        on a terminal, plain lines on standard error without one).
+    desc : str
+        What runs, for the progress.
 
     Returns
     -------
@@ -102,17 +106,21 @@ def march(case, current, step, row, snapshot, stats, progress=True, desc=""):
                   "stopped": None})
     times = case.times()
     rows, snapshots = [], [snapshot(current, 0.0)]
-    for t0, t1 in tqdm(list(zip(times[:-1], times[1:])), desc=desc, unit="step",
-                       disable=not progress or None, leave=False):
-        try:
-            current, info = _advance(current, step, t0, t1, stats)
-        except ConvergenceError as err:
-            if case.time.on_failure != "stop" or not rows:
-                raise
-            stats["stopped"] = f"at t = {t0:g} s: {err}"
-            break
-        rows.append(row(current, t1, t1 - t0, info))
-        snapshots.append(snapshot(current, t1))
+    shown = Progress(len(times) - 1, desc, enabled=progress)
+    try:
+        for t0, t1 in zip(times[:-1], times[1:]):
+            try:
+                current, info = _advance(current, step, t0, t1, stats)
+            except ConvergenceError as err:
+                if case.time.on_failure != "stop" or not rows:
+                    raise
+                stats["stopped"] = f"at t = {t0:g} s: {err}"
+                break
+            rows.append(row(current, t1, t1 - t0, info))
+            snapshots.append(snapshot(current, t1))
+            shown.update(t1, stats)
+    finally:
+        shown.close()
     history = pd.DataFrame(rows)
     if "err" in history and history["err"].isna().all():
         history["err"] = None
