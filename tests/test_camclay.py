@@ -155,10 +155,23 @@ def test_update_is_vectorised_over_points():
     ({"preset": "table1", "friction": 30}, "friction"),
     ({"preset": "table3"}, "preset"),
     ({"model": "elastic", "E": -1.0, "nu": 0.2}, "E"),
+    ({"lambda": 0.2, "kappa": 0.05, "e0": 1.0, "p0": 10.0}, "needs M, nu: set them"),
+    ({"model": "elastic", "nu": 0.3}, "needs E: set it"),
+    ({"preset": "table1", "Cc": 0.5, "lambda": 0.2}, "give Cc or lambda, not both"),
 ])
 def test_bad_parameters_name_themselves(spec, word):
     with pytest.raises(InputError, match=word):
         material_from_spec(spec)
+
+
+def test_compression_indices_are_slopes_per_decade():
+    clay = material_from_spec({"preset": "table1", "Cc": 0.46, "Cr": 0.092})
+    assert clay.lam == pytest.approx(0.46 / np.log(10)) and clay.kappa == pytest.approx(
+        0.092 / np.log(10))
+    # e falls by Cc over a tenfold stress on the normal compression line
+    p = np.array([10.0, 100.0])
+    v = clay.volume(p, p, (3.0, 3.0, 1.83))
+    assert v[0] - v[1] == pytest.approx(0.46, rel=1e-12)
 
 
 def test_elastic_skeleton_from_a_cam_clay_preset_has_its_initial_moduli():

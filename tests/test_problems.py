@@ -119,6 +119,33 @@ def test_equal_steps_and_load_functions():
     assert ramp.loading.factor(0.25) == pytest.approx(0.5)
 
 
+def test_times_take_units_and_output_times_become_levels():
+    with pytest.raises(InputError, match="at most time.end"):
+        load_case("terzaghi", ['time.end="2 d"', 'time.output=["12 h", "1 yr"]'])
+    case = load_case("terzaghi", ['time.end="2 d"', "time.steps=4",
+                                  'time.output=["0.3 d", "1 d"]'])
+    assert case.time.end == 172800.0
+    assert case.times().tolist() == [0.0, 25920.0, 43200.0, 86400.0, 129600.0, 172800.0]
+    assert [case.time.writes(t) for t in case.times()] == [
+        True, True, False, True, False, False]
+    ramp = load_case("soil-column", ['loading.load=[[0.0, 0.0], ["1 min", 2.0]]'])
+    assert ramp.loading.factor(30.0) == pytest.approx(1.0)
+    again = load_case("terzaghi", [f"time.{k}={v!r}" for k, v in
+                                   case.to_dict()["time"].items()
+                                   if k in ("end", "steps")])
+    assert again.time.end == case.time.end      # the resolved case holds seconds
+
+
+def test_the_resolved_case_names_every_material_parameter():
+    material = load_case("strip-footing", ["material.Cc=0.5"]).to_dict()["material"]
+    assert {k: material[k] for k in ("model", "M", "nu", "e0", "p0", "ocr")} == {
+        "model": "original", "M": 1.42, "nu": 0.333, "e0": 0.83, "p0": 3.0, "ocr": 1.0}
+    assert material["lambda"] == pytest.approx(0.5 / np.log(10)) and "preset" not in material
+    assert "specific_gravity" not in material          # weightless: it would do nothing
+    weighty = load_case("large-strain-column").to_dict()["material"]
+    assert weighty["specific_gravity"] == 2.65 and weighty["permeability_ck"] == 1.2
+
+
 def test_overrides_change_the_case():
     assert len(load_case("unconfined-compression", ["discretisation.nx=5"]).nodes()) \
         == 5 * 9 + 4 * 8
@@ -200,6 +227,15 @@ REFUSED = [
     ("terzaghi", ["geometry.width=0"], "geometry.width = 0"),
     ("terzaghi", ["geometry.height=-1"], "geometry.height = -1"),
     ("terzaghi", ["time.end=inf"], "time.end = inf"),
+    ("terzaghi", ['time.end="2 weeks"'], "time.end = '2 weeks' must be seconds or"),
+    ("terzaghi", ['time.output=["1 yr"]'], "time.output"),
+    ("terzaghi", ["time.output=[0.5, 0.2]"], "time.output"),
+    ("terzaghi", ["time.output=[]"], "time.output"),
+    ("terzaghi", ['loading.load=[["1 fortnight", 1.0]]'], "loading.load point's time"),
+    ("terzaghi", ["material.specific_gravity=2.7"],
+     "material.specific_gravity has no effect without gravity: add [gravity]"),
+    ("terzaghi", ["material.permeability_e=1.0"],
+     "material.permeability_e has no effect with permeability_law = 'constant'"),
     ("terzaghi", ["discretisation.ny=5002"], "discretisation.nx, ny"),  # hx/hy = 1000.2
     ("soil-column", ["discretisation.nx=2002"], "discretisation.nx, ny"),  # hx/hy 1/1000.5
     ("strip-footing", ["discretisation.x=[[5.0, 0]]"], "discretisation.x"),
@@ -244,6 +280,19 @@ def test_missing_edge_and_bad_file(tmp_path):
         load_case(path)
     with pytest.raises(InputError, match="does not exist"):
         load_case(tmp_path / "absent.toml")
+
+
+def test_a_missing_material_key_is_named(tmp_path):
+    text = (CASES / "soil-column.toml").read_text()
+    assert 'preset = "table1"' in text
+    path = tmp_path / "own.toml"
+    path.write_text(text.replace('preset = "table1"', "Cc = 0.25\nCr = 0.09\ne0 = 0.8\n"
+                                 "p0 = 3.0"))
+    with pytest.raises(InputError) as info:
+        load_case(path)
+    assert str(info.value) == ("material: model 'original' needs M, nu: set them in "
+                               "[material] (or start from a preset, e.g. preset = "
+                               "\"table1\")")
 
 
 def test_lambda_not_above_kappa_in_a_case_file(tmp_path):

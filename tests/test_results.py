@@ -87,3 +87,12 @@ def test_a_failed_swap_puts_the_previous_result_back(tmp_path, result, monkeypat
         result.write(out)
     assert [p.name for p in tmp_path.iterdir()] == ["run"]
     assert sorted(p.name for p in out.iterdir()) == before
+
+
+@pytest.mark.parametrize("method", ["efg", "fem-th"])
+def test_output_times_are_history_rows_and_the_only_fields(method):
+    case = load_case("terzaghi", ["time.steps=3", "time.end=1.0",
+                                  'time.output=[0.5, "1 s"]'])
+    result = METHODS[method](case, progress=False)
+    assert [s.time for s in result.snapshots] == [0.0, 0.5, 1.0]
+    assert result.history.time.tolist() == pytest.approx([1 / 3, 0.5, 2 / 3, 1.0])

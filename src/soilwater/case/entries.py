@@ -6,8 +6,14 @@ shows, e.g. ``"material"``) and raises :class:`~soilwater.errors.InputError` nam
 """
 
 import math
+import re
 
 from soilwater.errors import require
+
+#: Seconds per time unit of :func:`duration` (a year is 365.25 days).
+TIME_UNITS = {"s": 1.0, "min": 60.0, "h": 3600.0, "d": 86400.0, "day": 86400.0,
+              "days": 86400.0, "yr": 31_557_600.0, "year": 31_557_600.0,
+              "years": 31_557_600.0}
 
 #: Marks an entry without a default: it must be given.
 REQUIRED = object()
@@ -36,6 +42,34 @@ def number(table, key, where, default=REQUIRED):
     require(isinstance(value, (int, float)) and not isinstance(value, bool)
             and math.isfinite(value), f"{where}.{key} = {value!r} must be a finite number")
     return float(value)
+
+
+def duration(value, where):
+    """A time [s]: a finite number of seconds or a string ``"NUMBER UNIT"``, UNIT one of
+    :data:`TIME_UNITS`.
+
+    Examples
+    --------
+    >>> duration("60 yr", "time.end"), duration("1e6 s", "t"), duration(30, "t")
+    (1893456000.0, 1000000.0, 30.0)
+    >>> duration("2 weeks", "time.end")
+    Traceback (most recent call last):
+    ...
+    soilwater.errors.InputError: time.end = '2 weeks' must be seconds or "NUMBER UNIT" with UNIT one of s, min, h, d, day, days, yr, year, years (e.g. "60 yr")
+    """
+    seconds = math.nan
+    if isinstance(value, str):
+        match = re.fullmatch(r"\s*([-+0-9.eE]+)\s*([A-Za-z]+)\s*", value)
+        if match and match.group(2) in TIME_UNITS:
+            try:
+                seconds = float(match.group(1)) * TIME_UNITS[match.group(2)]
+            except ValueError:
+                pass
+    elif isinstance(value, (int, float)) and not isinstance(value, bool):
+        seconds = float(value)
+    require(math.isfinite(seconds), f"{where} = {value!r} must be seconds or \"NUMBER "
+            f"UNIT\" with UNIT one of {', '.join(TIME_UNITS)} (e.g. \"60 yr\")")
+    return seconds
 
 
 def integer(table, key, where):

@@ -121,14 +121,16 @@ class Loading:
 @dataclass(frozen=True)
 class TimeStepping:
     """End time [s] and either ``steps`` or geometric ``dt0``, ``growth``, ``dt_max``;
-    ``on_failure`` is what a step that fails after every halving does: ``error`` (no
-    result) or ``stop`` (the result ends at the last converged level)."""
+    ``output``: the times [s] at which fields are written (None: every level), each made
+    a time level; ``on_failure`` is what a step that fails after every halving does:
+    ``error`` (no result) or ``stop`` (the result ends at the last converged level)."""
 
     end: float
     steps: int | None = None
     dt0: float | None = None
     growth: float | None = None
     dt_max: float | None = None
+    output: tuple | None = None
     on_failure: str = "error"
 
     def levels(self):
@@ -136,17 +138,37 @@ class TimeStepping:
 
         ``steps`` gives equal steps; otherwise ``t_1 = dt0`` and
         ``t_{n+1} = t_n + min((growth - 1) t_n, dt_max)``, the last step cut to land on
-        ``end``. More than :data:`MAX_STEPS` steps raise :class:`~soilwater.errors.InputError`.
+        ``end``. The ``output`` times are added as levels; a level within ``1e-9 end``
+        of one gives way to it. More than :data:`MAX_STEPS` steps raise
+        :class:`~soilwater.errors.InputError`.
+
+        Examples
+        --------
+        >>> TimeStepping(end=1.0, steps=4, output=(0.3, 0.5)).levels().tolist()
+        [0.0, 0.25, 0.3, 0.5, 0.75, 1.0]
         """
         if self.steps is not None:
-            return np.linspace(0.0, self.end, self.steps + 1)
-        t = [0.0, min(self.dt0, self.end)]
-        while t[-1] < self.end:
-            nxt = t[-1] + min((self.growth - 1.0) * t[-1], self.dt_max)
-            t.append(self.end if nxt >= self.end * (1 - 1e-9) else nxt)
-            require(len(t) <= MAX_STEPS + 1, f"time: more than {MAX_STEPS} steps to reach "
-                    f"end = {self.end}: increase time.dt_max or time.growth")
-        return np.array(t)
+            t = np.linspace(0.0, self.end, self.steps + 1)
+        else:
+            t = [0.0, min(self.dt0, self.end)]
+            while t[-1] < self.end:
+                nxt = t[-1] + min((self.growth - 1.0) * t[-1], self.dt_max)
+                t.append(self.end if nxt >= self.end * (1 - 1e-9) else nxt)
+                require(len(t) <= MAX_STEPS + 1, f"time: more than {MAX_STEPS} steps to "
+                        f"reach end = {self.end}: increase time.dt_max or time.growth")
+            t = np.array(t)
+        if not self.output:
+            return t
+        out = np.asarray(self.output, dtype=float)
+        near = np.abs(t[:, None] - out[None, :]).min(axis=1) <= 1e-9 * self.end
+        return np.union1d(t[~near | (t == 0.0) | (t == self.end)], out)
+
+    def writes(self, t):
+        """Whether fields are written at level ``t`` [s]: always at 0, and at every level
+        without ``output``."""
+        if not self.output or t == 0.0:
+            return True
+        return bool(np.abs(np.asarray(self.output) - t).min() <= 1e-9 * self.end)
 
 
 @dataclass(frozen=True)
@@ -164,8 +186,10 @@ class Case:
     Build it with :func:`soilwater.case.loader.load_case` or
     :func:`soilwater.case.validation.case_from_dict`; it is immutable, comparable and
     picklable. Change it with :meth:`replace`, which validates the changed case again
-    (:func:`dataclasses.replace` does not). ``material_spec`` holds the ``[material]``
-    entries other than the fluid keys, as sorted ``(key, value)`` pairs; ``efg`` holds the
+    (:func:`dataclasses.replace` does not). ``material_spec`` holds the skeleton's
+    parameters, resolved (a preset and ``Cc``, ``Cr`` written out as
+    :func:`soilwater.material.presets.parameters` gives them), as sorted ``(key, value)``
+    pairs; ``efg`` holds the
     meshless settings, weights parsed into :class:`soilwater.efg.settings.Weight` objects, and
     ``fem`` the FEM reference's (:class:`soilwater.fem.settings.FEMSettings`).
     """
@@ -344,15 +368,23 @@ class Case:
             return -self.material().p0 / self.fluid.biot_alpha
         return self.initial.pore_pressure
 
+    def _fluid_dict(self):
+        """The fluid's ``[material]`` keys that act in this case: the permeability law's
+        own parameters only with that law, ``specific_gravity`` only under gravity."""
+        fluid = {k: v for k, v in asdict(self.fluid).items() if v is not None}
+        if self.gravity.g == 0:
+            fluid.pop("specific_gravity")
+        return fluid
+
     def to_dict(self):
-        """The case as a plain nested dict in TOML layout (defaults filled in)."""
+        """The case as a plain nested dict in TOML layout (defaults filled in, every
+        material parameter resolved: a preset's values written out)."""
         time = {k: v for k, v in asdict(self.time).items() if v is not None}
         return _plain({
             "name": self.name, "description": self.description, "analysis": self.analysis,
             "geometry": asdict(self.geometry),
             "discretisation": self.discretisation.to_dict(),
-            "material": {**dict(self.material_spec),
-                         **{k: v for k, v in asdict(self.fluid).items() if v is not None}},
+            "material": {**dict(self.material_spec), **self._fluid_dict()},
             "initial": self.initial.to_dict(),
             "gravity": asdict(self.gravity),
             "boundary": {name: edge.to_dict() for name, edge in self.boundary.items()},

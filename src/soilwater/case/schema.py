@@ -44,8 +44,14 @@ Schema (every case has the same one; unknown keys are an error)::
 
     [material]                        # soilwater.material.presets.material_from_spec, plus fluid
                                       # keys:
-    preset = "table1"
+    preset = "table1"                 # optional: start from the paper's Table 1
     model = "original"                # "original", "modified" or "elastic"
+    # lambda = 0.11                   # Cam-clay: lambda, kappa (slopes of v against
+    # kappa = 0.04                    # ln p'; or Cc, Cr, per decade: Cc = lambda ln 10),
+    # M = 1.42                        # M, nu, e0, p0 [kPa] (the initial state:
+    # nu = 0.333                      # e0 at p'0), ocr (default 1), G (default from nu);
+    # e0 = 0.83                       # elastic: E [kPa], nu, p0 (default 0), e0
+    # p0 = 3.0                        # (default 1); a missing key is named
     permeability = 0.0                # k [m/s] >= 0 (Darcy: q = -(k/gamma_w) grad p_w)
     gamma_w = 9.81                    # unit weight of water [kN/m3] > 0
     biot_alpha = 1.0                  # Biot coefficient in (0, 1]
@@ -53,10 +59,11 @@ Schema (every case has the same one; unknown keys are an error)::
     permeability_law = "constant"     # or "taylor": k = k_ref 10^((e - e_k)/C_k), or
                                       # "kozeny-carman": k = k_ref (e^3/(1+e)) /
                                       # (e_k^3/(1+e_k)); k_ref = permeability
-    permeability_e = 1.2              # e_k > 0 (required by taylor and kozeny-carman)
-    permeability_ck = 0.5             # C_k > 0 (required by taylor)
+    permeability_e = 1.2              # e_k > 0 (required by taylor and kozeny-carman,
+                                      # refused by the others)
+    permeability_ck = 0.5             # C_k > 0 (required by taylor, refused otherwise)
     specific_gravity = 2.65           # Gs of the solids > 1: the saturated unit weight
-                                      # (Gs + e) gamma_w / (1 + e) under gravity
+                                      # (Gs + e) gamma_w / (1 + e); only with [gravity]
 
     [gravity]                         # optional
     g = 9.81                          # m/s2 >= 0 along -y (default 0: weightless); the
@@ -104,9 +111,14 @@ Schema (every case has the same one; unknown keys are an error)::
     load = 1.0                        # a factor from t = 0+ (step load, the default) or
                                       # [[t0, f0], [t1, f1], ...] piecewise linear
 
-    [time]
+    [time]                            # every time in seconds or "NUMBER UNIT", UNIT
+                                      # s, min, h, d (day, days), yr (year, years) of
+                                      # 365.25 d: "60 yr", "1e6 s" (loading.load too)
     end = 20.0                        # s
     steps = 100                       # equal steps, or instead: dt0, growth, dt_max
+    output = [1.0, "0.5 min"]         # optional: fields are written at t = 0 and at
+                                      # these times only, each made a time level (a
+                                      # history row exactly there); default: every level
     on_failure = "error"              # a step that fails after every halving ends the
                                       # run with an error and no result; "stop": the
                                       # result ends at the last converged level, and
@@ -258,7 +270,7 @@ KEYS = {
     "edge": ("ux", "uy", "displacement", "traction", "water"),
     "segment": ("from", "to", "ux", "uy", "water", "settlement_rate", "force"),
     "loading": ("velocity_gradient", "load"),
-    "time": ("end", "steps", "dt0", "growth", "dt_max", "on_failure"),
+    "time": ("end", "steps", "dt0", "growth", "dt_max", "output", "on_failure"),
     "efg": ("weight_u", "scale_u", "weight_p", "scale_p", "integration", "rebuild_quality",
             "cells", "order", "essential",
             "penalty", "correction", "stabilisation", "stabilisation_factor"),

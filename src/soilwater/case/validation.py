@@ -14,7 +14,8 @@ import numpy as np
 
 from soilwater.case.boundary_validation import (read_boundary, require_coupled_footings,
                                                 require_segments_on_nodes)
-from soilwater.case.entries import check_keys, integer, number, pair, section, string
+from soilwater.case.entries import (check_keys, duration, integer, number, pair, section,
+                                    string)
 from soilwater.case.grid import LAYOUTS, Discretisation
 from soilwater.case.model import (ANALYSES, MAX_STEPS, ON_FAILURE, STRESS_STARTS, Case,
                                   Diagnostics, Geometry, Gravity, Initial, Loading, Probe,
@@ -26,7 +27,7 @@ from soilwater.efg.settings import (CELLS, CORRECTIONS, DEFAULT_SCALE, ESSENTIAL
 from soilwater.errors import InputError, require
 from soilwater.fem.settings import REMESH, FEMSettings
 from soilwater.material.fluid import PERMEABILITY_LAWS, Fluid
-from soilwater.material.presets import FLUID_KEYS, material_from_spec
+from soilwater.material.presets import FLUID_KEYS, material_from_spec, parameters
 from soilwater.references.closed_forms import exact_solution
 
 
@@ -78,6 +79,9 @@ def case_from_dict(data):
     require_coupled_footings(case)
     require_segments_on_nodes(case)
     _require_weight(case)
+    require("specific_gravity" not in section(data, "material") or case.gravity.g > 0,
+            "material.specific_gravity has no effect without gravity: add [gravity] with "
+            "g = 9.81 for a layer under its own weight, or remove the key")
     case.times()
     return case
 
@@ -174,7 +178,7 @@ def _material(table):
             continue
         spec[key] = (string(table, key, "material", None) if key in ("model", "preset")
                      else number(table, key, "material"))
-    material_from_spec(spec)
+    spec = parameters(material_from_spec(spec))
     law = string(table, "permeability_law", "material", "constant", PERMEABILITY_LAWS)
     fluid = Fluid(**{key: number(table, key, "material")
                      for key in FLUID_KEYS if key in table and key != "permeability_law"},
@@ -195,6 +199,10 @@ def _material(table):
         require(getattr(fluid, key) is not None and getattr(fluid, key) > 0,
                 f"material.{key} = {getattr(fluid, key)} must be set and positive for "
                 f"permeability_law = {law!r}")
+    idle = [key for key in ("permeability_e", "permeability_ck")
+            if key in table and key not in needs]
+    require(not idle, f"material.{', '.join(idle)} has no effect with permeability_law = "
+            f"{law!r}: remove it, or choose the law that uses it (taylor, kozeny-carman)")
     return tuple(sorted(spec.items())), fluid
 
 
@@ -362,32 +370,57 @@ def _loading(table):
     load = table.get("load", 1.0)
     if not isinstance(load, (list, tuple)):
         return Loading(L, number(table, "load", "loading", 1.0))
-    points = tuple(pair(p, "loading.load point [t, factor]") for p in load)
+    points = tuple(_load_point(p) for p in load)
     times = [t for t, _ in points]
     require(points and times[0] >= 0 and all(np.diff(times) > 0), "loading.load: give "
             "[t, factor] points with increasing times t >= 0, or one number (step load)")
     return Loading(L, points)
 
 
+def _load_point(value):
+    """A ``loading.load`` point ``[t, factor]``: the time [s] in any :func:`duration`
+    form."""
+    require(isinstance(value, (list, tuple)) and len(value) == 2, f"loading.load point "
+            f"{value!r} must be [t, factor], e.g. [\"1 d\", 1.0]")
+    return (duration(value[0], "loading.load point's time"),
+            number({"factor": value[1]}, "factor", "loading.load point"))
+
+
 def _time(table):
     check_keys(table, KEYS["time"], "time")
-    end = number(table, "end", "time")
-    require(end > 0, f"time.end = {end} must be positive (s)")
+    require("end" in table, "time.end is missing: set it (seconds or e.g. \"60 yr\")")
+    end = duration(table["end"], "time.end")
+    require(end > 0, f"time.end = {table['end']!r} must be positive")
     on_failure = string(table, "on_failure", "time", "error", ON_FAILURE)
+    output = _output(table.get("output"), end)
     if "steps" in table:
         require(not set(GEOMETRIC) & set(table), "time: give either steps or dt0, "
                 "growth, dt_max, not both")
         steps = integer(table, "steps", "time")
         require(1 <= steps <= MAX_STEPS, f"time.steps = {steps} must lie in 1..{MAX_STEPS}")
-        return TimeStepping(end=end, steps=steps, on_failure=on_failure)
+        return TimeStepping(end=end, steps=steps, output=output, on_failure=on_failure)
     require(set(GEOMETRIC) <= set(table), "time: give steps (equal steps) or all of dt0, "
             "growth, dt_max (geometric steps)")
-    dt0, growth, dt_max = (number(table, key, "time") for key in GEOMETRIC)
-    require(0 < dt0 <= dt_max, f"time.dt0 = {dt0} must be positive and at most "
-            f"time.dt_max = {dt_max}")
+    dt0, dt_max = (duration(table[key], f"time.{key}") for key in ("dt0", "dt_max"))
+    growth = number(table, "growth", "time")
+    require(0 < dt0 <= dt_max, f"time.dt0 = {table['dt0']!r} must be positive and at most "
+            f"time.dt_max = {table['dt_max']!r}")
     require(growth > 1, f"time.growth = {growth} must exceed 1 (t_(n+1) = growth t_n)")
-    return TimeStepping(end=end, dt0=dt0, growth=growth, dt_max=dt_max,
+    return TimeStepping(end=end, dt0=dt0, growth=growth, dt_max=dt_max, output=output,
                         on_failure=on_failure)
+
+
+def _output(value, end):
+    """``time.output``: increasing times in (0, end] [s], or None."""
+    if value is None:
+        return None
+    require(isinstance(value, (list, tuple)) and value, "time.output must be a list of "
+            "times, e.g. [\"0.1 yr\", \"1 yr\", \"10 yr\"]")
+    times = [duration(v, "time.output entry") for v in value]
+    require(all(0 < t <= end * (1 + 1e-9) for t in times) and all(np.diff(times) > 0),
+            f"time.output = {value!r}: give increasing times after 0 and at most time.end "
+            "(the fields at t = 0 are always written)")
+    return tuple(min(t, end) for t in times)
 
 
 def _probes(table, geometry):

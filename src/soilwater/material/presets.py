@@ -2,10 +2,13 @@
 
 A material table names a ``model`` (``original``, ``modified`` or ``elastic``), may
 start from a ``preset`` and overrides any of its entries. Cam-clay keys: ``lambda``,
-``kappa``, ``M``, ``nu``, ``e0``, ``p0``, ``ocr``, ``G``; elastic keys: ``E``, ``nu``,
-``p0``, ``e0``. Unknown keys are an error.
+``kappa`` (or the oedometer's compression and swelling indices ``Cc``, ``Cr``, slopes per
+decade of stress, which are ``lambda ln 10`` and ``kappa ln 10``), ``M``, ``nu``, ``e0``,
+``p0``, ``ocr``, ``G``; elastic keys: ``E``, ``nu``, ``p0``, ``e0``. Unknown keys are an
+error, and so is a missing one, by name.
 """
 
+import math
 import tomllib
 from pathlib import Path
 
@@ -58,20 +61,67 @@ def material_from_spec(spec):
         values.update(PRESETS[preset])
         if model == "elastic" and "kappa" in values:
             values = _initial_elasticity(values)
-    values.update(spec)
+    values.update(spec if model == "elastic" else _indices(spec))
     keys = _ELASTIC_KEYS if model == "elastic" else _CAMCLAY_KEYS
     unknown = sorted(set(values) - set(keys))
     require(not unknown, f"material: unknown key(s) {', '.join(unknown)} for model "
-            f"{model!r}: allowed are {', '.join(keys)} (and in a case {', '.join(FLUID_KEYS)})")
+            f"{model!r}: allowed are {', '.join(keys)}"
+            + ("" if model == "elastic" else ", Cc, Cr")
+            + f" (and in a case {', '.join(FLUID_KEYS)})")
+    needed = _ELASTIC_NEEDS if model == "elastic" else _CAMCLAY_NEEDS
+    missing = [k for k in needed if k not in values]
+    require(not missing, f"material: model {model!r} needs {', '.join(missing)}: set "
+            f"{'it' if len(missing) == 1 else 'them'} in [material] (or start from a "
+            f"preset, e.g. preset = \"table1\")")
     kwargs = {keys[k]: v for k, v in values.items()}
-    try:
-        if model == "elastic":
-            return LinearElastic(**kwargs)
-        return CamClay(model=model, **kwargs)
-    except TypeError as err:
-        missing = "E, nu" if model == "elastic" else "lambda, kappa, M, nu, e0, p0"
-        raise InputError(f"material: missing parameters for model {model!r} "
-                         f"(needs {missing}): {err}") from None
+    if model == "elastic":
+        return LinearElastic(**kwargs)
+    return CamClay(model=model, **kwargs)
+
+
+#: Keys each model needs (the others have defaults: ``ocr`` 1, ``G`` from ``nu``, an
+#: elastic skeleton's ``p0`` and ``e0``).
+_CAMCLAY_NEEDS = ("lambda", "kappa", "M", "nu", "e0", "p0")
+_ELASTIC_NEEDS = ("E", "nu")
+#: The oedometer's indices and the Cam-clay slopes they give: ``Cc = lambda ln 10``.
+_INDICES = {"Cc": "lambda", "Cr": "kappa"}
+
+
+def _indices(values):
+    """``values`` with ``Cc`` and ``Cr`` turned into ``lambda`` and ``kappa`` (e against
+    log10 of stress against e against ln: a factor ln 10).
+
+    Examples
+    --------
+    >>> _indices({"Cc": 0.2533, "Cr": 0.0921, "M": 1.2})  # doctest: +ELLIPSIS
+    {'M': 1.2, 'lambda': 0.1100..., 'kappa': 0.0399...}
+    """
+    out = {k: v for k, v in values.items() if k not in _INDICES}
+    for index, slope in _INDICES.items():
+        if index in values:
+            require(slope not in values, f"material: give {index} or {slope}, not both "
+                    f"({index} = {slope} ln 10)")
+            out[slope] = values[index] / math.log(10.0)
+    return out
+
+
+def parameters(material):
+    """Every parameter of a material as the ``[material]`` keys that rebuild it:
+    ``model`` and each key of its model (``G`` only when given), so a result says which
+    material made it.
+
+    Examples
+    --------
+    >>> parameters(material_from_spec({"preset": "table1"}))
+    {'model': 'original', 'lambda': 0.11, 'kappa': 0.04, 'M': 1.42, 'nu': 0.333, 'e0': 0.83, 'p0': 3.0, 'ocr': 1.0}
+    >>> material_from_spec(parameters(material_from_spec({"preset": "table1"}))).lam
+    0.11
+    """
+    elastic = not material.plastic
+    keys = _ELASTIC_KEYS if elastic else _CAMCLAY_KEYS
+    values = {key: getattr(material, attribute) for key, attribute in keys.items()}
+    return {"model": "elastic" if elastic else material.model,
+            **{k: float(v) for k, v in values.items() if v is not None}}
 
 
 def _initial_elasticity(clay):

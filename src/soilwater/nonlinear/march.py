@@ -100,7 +100,8 @@ def march(case, current, step, row, snapshot, stats, progress=True, desc=""):
     history : pandas.DataFrame
         One row per level; an ``err`` column that is undefined throughout is left empty.
     snapshots : list of Snapshot
-        At t = 0 and after every level.
+        At t = 0 and after every level (only at ``time.output``'s when the case gives
+        them).
     """
     stats.update({"newton_iterations": 0, "cutbacks": 0, "max_residual": 0.0,
                   "stopped": None})
@@ -117,7 +118,8 @@ def march(case, current, step, row, snapshot, stats, progress=True, desc=""):
                 stats["stopped"] = f"at t = {t0:g} s: {err}"
                 break
             rows.append(row(current, t1, t1 - t0, info))
-            snapshots.append(snapshot(current, t1))
+            if case.time.writes(t1):
+                snapshots.append(snapshot(current, t1))
             shown.update(t1, stats)
     finally:
         shown.close()
