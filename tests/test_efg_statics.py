@@ -126,5 +126,5 @@ def test_run_writes_a_readable_result(tmp_path):
     assert summary["options"]["cells"] == "delaunay"
     assert pd.read_csv(out / "history.csv").energy.iloc[0] < 0.15
     mesh = meshio.read(out / "fields_0000.vtu")
-    assert len(mesh.points) == 25 * 7 and mesh.point_data["u"].shape == (175, 2)
+    assert len(mesh.points) == 25 * 7 and mesh.point_data["u"].shape == (175, 3)
     assert "fields_0000.vtu" in (out / "fields.pvd").read_text()

@@ -139,5 +139,5 @@ def test_run_writes_vtu_with_cells(tmp_path):
     history = pd.read_csv(out / "history.csv")
     assert list(history.columns[:5]) == ["time", "eps_a", "p", "q", "err"]
     mesh = meshio.read(out / "fields_0001.vtu")
-    assert mesh.cells[0].type == "triangle" and len(mesh.cells[0].data) == 20
+    assert mesh.cells[0].type == "triangle6" and len(mesh.cells[0].data) == 20
     assert {"u", "p_w", "p_eff", "q"} <= set(mesh.point_data)

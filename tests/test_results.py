@@ -32,19 +32,23 @@ def test_pvd_times_and_fields_are_read_by_vtk(tmp_path, result):
     for t, snap in zip(times, result.snapshots, strict=True):
         reader.set_active_time_value(t)
         (block,) = reader.read()
-        assert block.n_points == len(snap.points)
+        n = len(snap.points)          # the solver's points first (fem-th: then mid-sides)
+        assert block.n_points == n if result.method == "efg" else block.n_points > n
         for name in ("u", "p_w", "p_eff", "q"):
             values = block.point_data[name]
             assert len(values) == block.n_points and np.isfinite(values).all()
-            np.testing.assert_allclose(values, snap.point_data[name])
+            np.testing.assert_allclose(values[:n, :2] if name == "u" else values[:n],
+                                       snap.point_data[name])
+        assert not block.point_data["u"][:, 2].any()           # z = 0
 
 
 def test_one_vtu_is_read_by_vtk(tmp_path, result):
     out = result.write(tmp_path / "run")
     mesh = pyvista.read(out / "fields_0003.vtu")
     snap = result.snapshots[3]
-    assert mesh.n_points == len(snap.points) and mesh.n_cells > 0
-    np.testing.assert_allclose(mesh.point_data["p_w"], snap.point_data["p_w"])
+    assert mesh.n_points >= len(snap.points) and mesh.n_cells > 0
+    np.testing.assert_allclose(mesh.point_data["p_w"][:len(snap.points)],
+                               snap.point_data["p_w"])
 
 
 def test_every_result_folder_holds_the_marker(tmp_path, result):
@@ -96,3 +100,57 @@ def test_output_times_are_history_rows_and_the_only_fields(method):
     result = METHODS[method](case, progress=False)
     assert [s.time for s in result.snapshots] == [0.0, 0.5, 1.0]
     assert result.history.time.tolist() == pytest.approx([1 / 3, 0.5, 2 / 3, 1.0])
+
+
+def test_a_post_processor_warps_by_u_and_contours_p_w(tmp_path, result):
+    out = result.write(tmp_path / "run")
+    grid = pyvista.read(out / "fields_0001.vtu")
+    assert grid.n_cells > 0 and grid["u"].shape == (grid.n_points, 3)
+    warped = grid.warp_by_vector("u", factor=100.0)
+    np.testing.assert_allclose(warped.points, grid.points + 100.0 * grid["u"])
+    low, high = grid["p_w"].min(), grid["p_w"].max()
+    assert high > low
+    lines = grid.contour([0.5 * (low + high)], scalars="p_w")
+    assert lines.n_points > 0                           # an isoline crosses the column
+    np.testing.assert_allclose(lines["p_w"], 0.5 * (low + high), rtol=1e-9)
+    units = json.loads((out / "summary.json").read_text())["field_units"]
+    assert set(grid.point_data) | set(grid.cell_data) <= set(units)
+
+
+def test_fem_th_is_written_on_its_own_quadratic_nodes(tmp_path):
+    from skfem import CellBasis, ElementTriP2
+
+    result = METHODS["fem-th"](load_case("terzaghi", FAST), progress=False)
+    mesh = result.mesh()
+    (block,) = mesh.cells
+    snap = result.snapshots[-1]
+    triangles = snap.cells[0][1]
+    assert block.type == "triangle6" and np.array_equal(block.data[:, :3], triangles)
+    skfem_mesh = type_mesh(snap.points, triangles)
+    nodes = CellBasis(skfem_mesh, ElementTriP2()).doflocs.T
+    np.testing.assert_allclose(mesh.points[:, :2], nodes, atol=1e-12)
+    velocity = mesh.point_data["velocity"]
+    assert velocity.shape == (len(nodes), 3) and np.abs(velocity[len(snap.points):]).max() > 0
+    # each mid-side node lies halfway along its cell's edge, in VTK's edge order
+    corners, mids = mesh.points[block.data[:, :3]], mesh.points[block.data[:, 3:]]
+    np.testing.assert_allclose(mids, 0.5 * (corners + np.roll(corners, -1, axis=1)),
+                               atol=1e-12)
+
+
+def type_mesh(points, triangles):
+    """A scikit-fem triangle mesh in the given vertex order."""
+    from skfem import MeshTri
+
+    return MeshTri(np.ascontiguousarray(points.T), np.ascontiguousarray(triangles.T))
+
+
+def test_cell_strains_of_a_homogeneous_compression_are_its_log_strain():
+    case = load_case("unconfined-compression", ["time.steps=4"])
+    for method in ("efg-paper", "fem-p1p1"):
+        result = METHODS[method](case, progress=False)
+        mesh = result.mesh()
+        height = case.geometry.height
+        top = result.snapshots[-1].points[:, 1].max()
+        strain = mesh.cell_data["log_strain"][0].reshape(-1, 3, 3)
+        np.testing.assert_allclose(strain[:, 1, 1], np.log(top / height), rtol=1e-4)
+        assert (mesh.cell_data["shear_strain"][0] > 0).all()

@@ -24,6 +24,7 @@ import meshio
 import numpy as np
 import pandas as pd
 
+from soilwater import fields
 from soilwater.errors import InputError, SoilwaterError
 
 #: File in every result folder :meth:`Result.write` writes; only a folder holding it (or an
@@ -230,15 +231,6 @@ def write_csv(frame, path):
     return path
 
 
-def permeability(case, v):
-    """``{"permeability": k}`` [m/s] at specific volumes v when k depends on the void
-    ratio (``material.permeability_law``), else ``{}``: the snapshot field."""
-    fluid = case.fluid
-    if fluid.permeability_law == "constant":
-        return {}
-    return {"permeability": fluid.mobility_at(v)[0] * fluid.gamma_w}
-
-
 #: Units of the history columns (:attr:`Result.units`), in the built-in cases' kPa, m, s
 #: (a case in other units keeps its stress, length and time units); ``-`` is
 #: dimensionless. Columns per probe or segment are named ``KIND@NAME``, with the unit of
@@ -251,14 +243,15 @@ HISTORY_UNITS = {
     "energy": "-", "rebuilds": "-", "p_w@": "kPa", "settlement@": "m", "pressure@": "kPa",
 }
 
-#: Units of the snapshot fields (:meth:`Result.mesh` point data), as
+#: Units of a snapshot's in-memory fields (:attr:`Snapshot.point_data`), as
 #: :data:`HISTORY_UNITS`: displacement ``u`` (N, 2), pore pressure ``p_w`` in excess of
-#: hydrostatic and ``p_eff``, q (compression positive), Cauchy ``stress`` (N, 4), tension
-#: positive, ``stretching`` (N, 4), specific volume ``v``, MLS ``support_radius`` and
-#: ``permeability`` k(e).
-FIELD_UNITS = {"u": "m", "p_w": "kPa", "p_eff": "kPa", "q": "kPa", "stress": "kPa",
-               "stretching": "1/s", "v": "-", "support_radius": "m",
-               "permeability": "m/s"}
+#: hydrostatic and ``p_eff``, q (compression positive), ``pc``, effective Cauchy
+#: ``stress`` (N, 4: xx, yy, zz, xy), tension positive, ``stretching`` (N, 4), FEM's
+#: ``velocity`` (N, 2), specific volume ``v``, MLS ``support_radius`` and
+#: ``permeability`` k(e). The files hold more (:data:`soilwater.fields.UNITS`).
+FIELD_UNITS = {"u": "m", "p_w": "kPa", "p_eff": "kPa", "q": "kPa", "pc": "kPa",
+               "stress": "kPa", "stretching": "1/s", "velocity": "m/s", "v": "-",
+               "support_radius": "m", "permeability": "m/s"}
 
 
 def unit(column):
@@ -277,19 +270,20 @@ def unit(column):
 class Snapshot:
     """Fields at one output time: points (N, 2) [m] and named point arrays
     (:data:`FIELD_UNITS`); ``cells`` as meshio's ``[(type, (C, V) indices)]``, empty for a
-    point cloud."""
+    point cloud; ``quadratic``, for the quadratic FEM pairs, what their own nodes need
+    (:func:`soilwater.fields.quadratic`)."""
 
     time: float
     points: np.ndarray
     point_data: dict
     cells: list = field(default_factory=list)
+    quadratic: dict = None
 
-    def mesh(self):
-        """The snapshot as a :class:`meshio.Mesh`: points (N, 3) [m] with z = 0, the cells
-        (a point cloud as ``vertex`` cells) and the point data; what the VTU files hold."""
-        cells = self.cells or [("vertex", np.arange(len(self.points))[:, None])]
-        points3 = np.column_stack([self.points, np.zeros(len(self.points))])
-        return meshio.Mesh(points3, cells, point_data=self.point_data)
+    def mesh(self, case):
+        """The snapshot as the :class:`meshio.Mesh` the VTU files hold
+        (:func:`soilwater.fields.mesh`: cells for every method, u with three components,
+        derived fields of ``case``)."""
+        return fields.mesh(self, case)
 
 
 @dataclass
@@ -340,14 +334,17 @@ class Result:
 
     def mesh(self, i=-1):
         """Snapshot ``i`` (the last by default) as a :class:`meshio.Mesh`, as written to
-        ``fields_NNNN.vtu``: points (N, 3) [m], current configuration, z = 0; point data
-        in :data:`FIELD_UNITS`. Its time [s] is ``result.snapshots[i].time``."""
-        return self.snapshots[i].mesh()
+        ``fields_NNNN.vtu``: points (N, 3) [m], current configuration, z = 0; point and
+        cell data in :data:`soilwater.fields.UNITS`. Its time [s] is
+        ``result.snapshots[i].time``."""
+        return self.snapshots[i].mesh(self.case)
 
     def write(self, folder):
-        """Write ``summary.json`` (with the case, the options and ``history_units``, the
-        unit of each ``history.csv`` column), ``history.csv``, ``fields.pvd``, VTU files and
-        :data:`MARKER` to ``folder``.
+        """Write ``summary.json`` (the resolved case, every material parameter written
+        out, the options, the versions of soilwater and its libraries, ``history_units``,
+        the unit of each ``history.csv`` column, and ``field_units``, of each VTU
+        field), ``history.csv``, ``fields.pvd``, VTU files and :data:`MARKER` to
+        ``folder``.
 
         ``folder`` must pass :func:`check_output_folder`. Everything goes to a hidden
         temporary sibling folder; only when it is complete does it take the place of
@@ -385,7 +382,8 @@ class Result:
         write_csv(self.history, folder / "history.csv")
         summary = {"case": self.case.to_dict(), "method": self.method,
                    "options": self.options, "versions": versions(),
-                   "history_units": self.units, **self.summary}
+                   "history_units": self.units, "field_units": fields.UNITS,
+                   **self.summary}
         with naming(folder / "summary.json"):
             (folder / "summary.json").write_text(json.dumps(summary, indent=2,
                                                             default=float))
@@ -400,7 +398,7 @@ class Result:
                                          f"{snap.time}: it holds NaN or infinity")
             name = f"fields_{k:04d}.vtu"
             with naming(folder / name):
-                meshio.write(folder / name, snap.mesh())
+                meshio.write(folder / name, snap.mesh(self.case))
             entries.append(f'    <DataSet timestep="{float(snap.time)!r}" file="{name}"/>')
         with naming(folder / "fields.pvd"):
             (folder / "fields.pvd").write_text(

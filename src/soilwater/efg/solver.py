@@ -83,7 +83,8 @@ from soilwater.nonlinear.history import history_row, timed
 from soilwater.nonlinear.march import run
 from soilwater.nonlinear.newton import newton
 from soilwater.physics.geostatic import initial_state
-from soilwater.results import Snapshot, permeability
+from soilwater.fields import permeability
+from soilwater.results import Snapshot
 
 
 def solve(case, progress=True):
@@ -240,7 +241,7 @@ def _snapshot(model, points, t):
         state = {k: nodal_average(points.cells, n, v) for k, v in state.items()}
     p, q = invariants(stress)
     data = {"u": points.nodes - model.case.nodes(), "p_w": at.phi @ points.p,
-            "p_eff": p, "q": q, "stretching": stretching,
+            "p_eff": p, "q": q, "stress": stress, "stretching": stretching,
             "support_radius": at.support}
     data.update(state)
     data.update(permeability(model.case, state["v"]))

@@ -89,7 +89,8 @@ from soilwater.nonlinear.history import history_row
 from soilwater.nonlinear.march import run
 from soilwater.nonlinear.newton import newton
 from soilwater.physics.geostatic import initial_state
-from soilwater.results import Snapshot, permeability
+from soilwater.fields import permeability
+from soilwater.results import Snapshot
 
 
 def solve(case, method="fem-th", progress=True):
@@ -182,21 +183,32 @@ def _history_row(model, current, t, dt, info):
 
 
 def _snapshot(model, current, t):
-    """Vertex fields with the current cells: u, p_w, and p', q and state averaged to the
-    vertices (each vertex: the volume-weighted mean of its elements' means)."""
-    mesh0 = current.topology.space.mesh0
+    """Vertex fields with the current cells: u, p_w, the last step's velocity, and p', q,
+    the effective stress and the state averaged to the vertices (each vertex: the
+    volume-weighted mean of its elements' means); for the quadratic pairs also what the
+    files need to write them on their own nodes (:func:`soilwater.fields.quadratic`)."""
+    space = current.topology.space
+    mesh0 = space.mesh0
     cells = mesh0.t
-    E = cells.shape[1]
+    E, N = cells.shape[1], len(current.vertices)
     p, q = invariants(current.stress)
-    quantities = {"p_eff": p, "q": q, **current.state}
-    data = {"u": current.vertices - mesh0.p.T, "p_w": current.p[:len(current.vertices)]}
+    quantities = {"p_eff": p, "q": q, "stress": current.stress,
+                  "stretching": current.stretching, **current.state}
+    velocity = current.velocity.reshape(2, -1).T
+    data = {"u": current.vertices - mesh0.p.T, "p_w": current.p[:N],
+            "velocity": velocity[:N]}
     volume = current.weights.reshape(E, -1)
     share = np.repeat(volume.sum(1), cells.shape[0])
     node_volume = np.bincount(cells.T.ravel(), share, minlength=mesh0.p.shape[1])
     for name, values in quantities.items():
-        mean = (volume * values.reshape(E, -1)).sum(1)
-        data[name] = np.bincount(cells.T.ravel(), np.repeat(mean, cells.shape[0]),
-                                 minlength=mesh0.p.shape[1]) / node_volume
+        mean = np.einsum("eq,eqk->ek", volume, values.reshape(*volume.shape, -1))
+        total = np.column_stack([np.bincount(cells.T.ravel(), np.repeat(m, cells.shape[0]),
+                                             minlength=N) for m in mean.T])
+        data[name] = (total / node_volume[:, None]).reshape((N, *values.shape[1:]))
     data.update(permeability(model.case, data["v"]))
+    quadratic = None
+    if space.n_u > N:                   # the quadratic pairs' own nodes, for the files
+        quadratic = {"facets": mesh0.facets.T.copy(), "t2f": mesh0.t2f.T.copy(),
+                     "velocity": velocity}
     return Snapshot(t, current.vertices.copy(), data,
-                    cells=[(current.topology.space.cell_type, cells.T.copy())])
+                    cells=[(space.cell_type, cells.T.copy())], quadratic=quadratic)
