@@ -158,10 +158,24 @@ def test_update_is_vectorised_over_points():
     ({"lambda": 0.2, "kappa": 0.05, "e0": 1.0, "p0": 10.0}, "needs M, nu: set them"),
     ({"model": "elastic", "nu": 0.3}, "needs E: set it"),
     ({"preset": "table1", "Cc": 0.5, "lambda": 0.2}, "give Cc or lambda, not both"),
+    ({"model": "elastic", "mv": 1e-3, "E": 5.0, "nu": 0.3}, "give E or mv, not both"),
+    ({"model": "elastic", "mv": -1e-3, "nu": 0.3}, "material.mv"),
 ])
 def test_bad_parameters_name_themselves(spec, word):
     with pytest.raises(InputError, match=word):
         material_from_spec(spec)
+
+
+def test_mv_is_the_inverse_constrained_modulus_and_xie_leo_k_grows_as_v_squared():
+    from soilwater.material.fluid import Fluid
+
+    skeleton = material_from_spec({"model": "elastic", "mv": 2e-3, "nu": 0.25})
+    K, G = skeleton.moduli()
+    assert K + 4 * G / 3 == pytest.approx(1 / 2e-3, rel=1e-12)
+    fluid = Fluid(permeability=1e-9, permeability_law="xie-leo", permeability_e=1.0)
+    k, dk = fluid.mobility_at(np.array([2.0, 1.5]))
+    np.testing.assert_allclose(k * fluid.gamma_w, [1e-9, 1e-9 * 0.75**2], rtol=1e-12)
+    np.testing.assert_allclose(dk, 2 * k / np.array([2.0, 1.5]), rtol=1e-12)
 
 
 def test_compression_indices_are_slopes_per_decade():

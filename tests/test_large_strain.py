@@ -42,3 +42,25 @@ def test_summary_windows_take_the_largest_error_from_each_on():
     assert row["error_from_0.1T"] == pytest.approx(0.02)
     assert row["error_from_1T"] == pytest.approx(0.005)
     assert row.final_error == pytest.approx(-0.001)
+
+
+@pytest.mark.parametrize("method", ["efg", "fem-th", "fem-p1p1-stab"])
+def test_xie_leo_case_is_within_3_percent_of_the_closed_form(method):
+    """The built-in xie-leo case (constant mv, k ~ (1 + e)^2, step load, 18 % strain)
+    against Xie and Leo's closed form at its output times: the settlement within 3 % of
+    the closed form's and the pore pressure at mid-depth within 3 % of the load."""
+    from soilwater.methods import solve
+    from soilwater.references.closed_forms import xie_leo
+
+    case = load_case("xie-leo")
+    result = solve(case, method, progress=False)
+    fluid, load, height = case.fluid, 200.0, case.geometry.height
+    mv = 1e-3
+    rows = result.history.set_index("time")
+    assert [s.time for s in result.snapshots][1:] == list(case.time.output)
+    for t in case.time.output:
+        u, settlement = xie_leo([height / 2], t, load, height, mv, fluid.permeability,
+                                fluid.gamma_w)
+        row = rows.loc[t]
+        assert row["settlement"] == pytest.approx(settlement, rel=0.03), (t, row)
+        assert abs(row["p_w@mid"] - u[0]) < 0.03 * load, (t, row["p_w@mid"], u[0])

@@ -29,7 +29,7 @@ def test_builtins_are_the_case_files_by_name():
     assert list(BUILTIN) == sorted(p.stem for p in CASES.glob("*.toml")) == [
         "cantilever", "large-strain-column", "mandel", "patch-test", "rough-compression",
         "self-weight-consolidation", "simple-shear", "soil-column", "strip-footing",
-        "strip-footing-consolidation", "terzaghi", "unconfined-compression"]
+        "strip-footing-consolidation", "terzaghi", "unconfined-compression", "xie-leo"]
 
 
 @pytest.mark.parametrize("name", list(BUILTIN))

@@ -50,17 +50,21 @@ Schema (every case has the same one; unknown keys are an error)::
     # kappa = 0.04                    # ln p'; or Cc, Cr, per decade: Cc = lambda ln 10),
     # M = 1.42                        # M, nu, e0, p0 [kPa] (the initial state:
     # nu = 0.333                      # e0 at p'0), ocr (default 1), G (default from nu);
-    # e0 = 0.83                       # elastic: E [kPa], nu, p0 (default 0), e0
-    # p0 = 3.0                        # (default 1); a missing key is named
+    # e0 = 0.83                       # elastic: E [kPa] (or mv [1/kPa], the
+    # p0 = 3.0                        # oedometric compressibility 1/(constrained
+                                      # modulus): a constant-m_v skeleton), nu, p0
+                                      # (default 0), e0 (default 1); a missing key is
+                                      # named
     permeability = 0.0                # k [m/s] >= 0 (Darcy: q = -(k/gamma_w) grad p_w)
     gamma_w = 9.81                    # unit weight of water [kN/m3] > 0
     biot_alpha = 1.0                  # Biot coefficient in (0, 1]
     storage = 0.0                     # S = 1/M_biot [1/kPa] >= 0
-    permeability_law = "constant"     # or "taylor": k = k_ref 10^((e - e_k)/C_k), or
+    permeability_law = "constant"     # or "taylor": k = k_ref 10^((e - e_k)/C_k),
                                       # "kozeny-carman": k = k_ref (e^3/(1+e)) /
-                                      # (e_k^3/(1+e_k)); k_ref = permeability
-    permeability_e = 1.2              # e_k > 0 (required by taylor and kozeny-carman,
-                                      # refused by the others)
+                                      # (e_k^3/(1+e_k)), or "xie-leo": k = k_ref
+                                      # ((1+e)/(1+e_k))^2; k_ref = permeability
+    permeability_e = 1.2              # e_k > 0 (required by taylor, kozeny-carman and
+                                      # xie-leo, refused by constant)
     permeability_ck = 0.5             # C_k > 0 (required by taylor, refused otherwise)
     specific_gravity = 2.65           # Gs of the solids > 1: the saturated unit weight
                                       # (Gs + e) gamma_w / (1 + e); only with [gravity]

@@ -194,7 +194,7 @@ def _material(table):
             f"{fluid.specific_gravity} must exceed 1 (solids heavier than water; 2.65 for "
             "quartz)")
     needs = {"constant": (), "taylor": ("permeability_e", "permeability_ck"),
-             "kozeny-carman": ("permeability_e",)}[law]
+             "kozeny-carman": ("permeability_e",), "xie-leo": ("permeability_e",)}[law]
     for key in needs:
         require(getattr(fluid, key) is not None and getattr(fluid, key) > 0,
                 f"material.{key} = {getattr(fluid, key)} must be set and positive for "
@@ -202,7 +202,8 @@ def _material(table):
     idle = [key for key in ("permeability_e", "permeability_ck")
             if key in table and key not in needs]
     require(not idle, f"material.{', '.join(idle)} has no effect with permeability_law = "
-            f"{law!r}: remove it, or choose the law that uses it (taylor, kozeny-carman)")
+            f"{law!r}: remove it, or choose a law that uses it (taylor; permeability_e also "
+            "kozeny-carman, xie-leo)")
     return tuple(sorted(spec.items())), fluid
 
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 #: The laws k(e) of ``material.permeability_law`` (:meth:`Fluid.mobility_at`).
-PERMEABILITY_LAWS = ("constant", "taylor", "kozeny-carman")
+PERMEABILITY_LAWS = ("constant", "taylor", "kozeny-carman", "xie-leo")
 
 
 @dataclass(frozen=True)
@@ -21,9 +21,11 @@ class Fluid:
 
     The Darcy mobility entering the continuity equation is ``k / gamma_w``. With
     ``permeability_law = "constant"`` k is ``permeability``; otherwise it falls with the
-    void ratio e (:meth:`mobility_at`): Taylor's ``k = k_ref 10^((e - e_k) / C_k)`` or
-    Kozeny-Carman's ``k = k_ref (e^3 / (1 + e)) / (e_k^3 / (1 + e_k))``, with ``k_ref =
-    permeability``, ``e_k = permeability_e`` and ``C_k = permeability_ck``.
+    void ratio e (:meth:`mobility_at`): Taylor's ``k = k_ref 10^((e - e_k) / C_k)``,
+    Kozeny-Carman's ``k = k_ref (e^3 / (1 + e)) / (e_k^3 / (1 + e_k))`` or Xie and Leo's
+    ``k = k_ref ((1 + e) / (1 + e_k))^2`` (with a constant-m_v skeleton, the law of their
+    closed form), with ``k_ref = permeability``, ``e_k = permeability_e`` and ``C_k =
+    permeability_ck``.
     """
 
     permeability: float = 0.0
@@ -73,5 +75,8 @@ class Fluid:
         if self.permeability_law == "taylor":
             k = self.mobility * 10.0 ** ((e - e_k) / self.permeability_ck)
             return k, k * np.log(10.0) / self.permeability_ck
+        if self.permeability_law == "xie-leo":
+            k = self.mobility * (v / (1.0 + e_k)) ** 2
+            return k, 2.0 * k / v
         k = self.mobility * (e**3 / v) / (e_k**3 / (1.0 + e_k))
         return k, k * (3.0 / e - 1.0 / v)

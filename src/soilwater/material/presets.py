@@ -4,8 +4,9 @@ A material table names a ``model`` (``original``, ``modified`` or ``elastic``), 
 start from a ``preset`` and overrides any of its entries. Cam-clay keys: ``lambda``,
 ``kappa`` (or the oedometer's compression and swelling indices ``Cc``, ``Cr``, slopes per
 decade of stress, which are ``lambda ln 10`` and ``kappa ln 10``), ``M``, ``nu``, ``e0``,
-``p0``, ``ocr``, ``G``; elastic keys: ``E``, ``nu``, ``p0``, ``e0``. Unknown keys are an
-error, and so is a missing one, by name.
+``p0``, ``ocr``, ``G``; elastic keys: ``E`` (or the oedometric compressibility ``mv``,
+a constant-m_v skeleton), ``nu``, ``p0``, ``e0``. Unknown keys are an error, and so is a
+missing one, by name.
 """
 
 import math
@@ -61,12 +62,19 @@ def material_from_spec(spec):
         values.update(PRESETS[preset])
         if model == "elastic" and "kappa" in values:
             values = _initial_elasticity(values)
-    values.update(spec if model == "elastic" else _indices(spec))
+    if model == "elastic":
+        require(not {"E", "mv"} <= set(spec), "material: give E or mv, not both (mv = "
+                "1 / the constrained modulus)")
+        if "mv" in spec:
+            values.pop("E", None)           # a preset's modulus gives way
+        values = _compressibility({**values, **spec})
+    else:
+        values.update(_indices(spec))
     keys = _ELASTIC_KEYS if model == "elastic" else _CAMCLAY_KEYS
     unknown = sorted(set(values) - set(keys))
     require(not unknown, f"material: unknown key(s) {', '.join(unknown)} for model "
             f"{model!r}: allowed are {', '.join(keys)}"
-            + ("" if model == "elastic" else ", Cc, Cr")
+            + (", mv" if model == "elastic" else ", Cc, Cr")
             + f" (and in a case {', '.join(FLUID_KEYS)})")
     needed = _ELASTIC_NEEDS if model == "elastic" else _CAMCLAY_NEEDS
     missing = [k for k in needed if k not in values]
@@ -85,6 +93,29 @@ _CAMCLAY_NEEDS = ("lambda", "kappa", "M", "nu", "e0", "p0")
 _ELASTIC_NEEDS = ("E", "nu")
 #: The oedometer's indices and the Cam-clay slopes they give: ``Cc = lambda ln 10``.
 _INDICES = {"Cc": "lambda", "Cr": "kappa"}
+
+
+def _compressibility(values):
+    """``values`` with the oedometric volume compressibility ``mv`` [1/kPa] turned into
+    Young's modulus: the constrained modulus ``E (1 - nu) / ((1 + nu) (1 - 2 nu))`` is
+    ``1 / mv``. Under the Jaumann rate, a laterally confined layer then keeps ``d ln(1 +
+    e) = -mv d sigma'_v`` at any strain: Xie and Leo's constant-m_v skeleton.
+
+    Examples
+    --------
+    >>> round(_compressibility({"mv": 1e-3, "nu": 0.3})["E"], 6)
+    742.857143
+    """
+    if "mv" not in values:
+        return dict(values)
+    require("nu" in values, "material: mv needs nu (the constrained modulus 1/mv sets E "
+            "with it)")
+    nu, mv = values["nu"], values["mv"]
+    require(mv > 0, f"material.mv = {mv} must be positive (1/kPa)")
+    require(-1.0 < nu < 0.5, f"material.nu = {nu} must lie in (-1, 0.5)")
+    out = {k: v for k, v in values.items() if k != "mv"}
+    out["E"] = (1 + nu) * (1 - 2 * nu) / ((1 - nu) * mv)
+    return out
 
 
 def _indices(values):
