@@ -39,9 +39,11 @@ def _run(case, method, overrides, elastic=False):
     the Cam-clay preset's initial moduli (``material.model = "elastic"``)."""
     case = load_case(case, overrides)
     if elastic:
+        from soilwater.material.presets import FLUID_KEYS
+
         data = case.to_dict()
-        data["material"].pop("ocr", None)
-        data["material"]["model"] = "elastic"
+        fluid = {k: v for k, v in data["material"].items() if k in FLUID_KEYS}
+        data["material"] = {"preset": "table1", "model": "elastic", **fluid}
         case = case_from_dict(data)
     return fem_solve(case, method, progress=False)
 
