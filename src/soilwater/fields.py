@@ -24,6 +24,7 @@ import meshio
 import numpy as np
 
 from soilwater.geometry.triangulation import delaunay_triangles
+from soilwater.material.kinematics import IDENTITY, inverse
 from soilwater.physics.geostatic import G_N
 
 #: Unit of every field written (``-``: dimensionless). Point data: ``u`` displacement;
@@ -60,7 +61,8 @@ def mesh(snapshot, case):
         Current positions (N, 3), z = 0; one cell block; the fields of :data:`UNITS`
         that the snapshot has or that follow from it.
     """
-    points, data = np.asarray(snapshot.points), dict(snapshot.point_data)
+    points = np.asarray(snapshot.points)
+    data = {k: v for k, v in snapshot.point_data.items() if k != "permeability"}  # -> k
     initial = points - data["u"]
     if snapshot.cells:
         (kind, cells), = snapshot.cells
@@ -91,11 +93,10 @@ def permeability(case, v):
 
 def derived(case, points, data):
     """Fields that follow from the solver's and the case's: ``e`` and ``k`` (of the law at
-    that ``v``; a snapshot's ``permeability`` is taken out of ``data``), ``p_w_total`` and
-    ``stress_total`` (where the snapshot has ``v``, ``p_w``, ``stress``)."""
+    that ``v``), ``p_w_total`` and ``stress_total`` (where the snapshot has ``v``,
+    ``p_w``, ``stress``)."""
     out = {}
     fluid = case.fluid
-    data.pop("permeability", None)      # written as k
     if "v" in data:
         out["e"] = data["v"] - 1.0
         out["k"] = permeability(case, data["v"]).get("permeability",
@@ -107,7 +108,7 @@ def derived(case, points, data):
     out["p_w_total"] = data["p_w"] + hydrostatic
     if "stress" in data:
         out["stress_total"] = (data["stress"] - fluid.biot_alpha * out["p_w_total"][:, None]
-                               * np.array([1.0, 1.0, 1.0, 0.0]))
+                               * IDENTITY)
     return out
 
 
@@ -160,7 +161,7 @@ def strains(initial, current):
                              x[:, 2] + x[:, 3] - x[:, 0] - x[:, 1]], axis=2) / 2
         return np.stack([x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]], axis=2)
 
-    F = edges(current) @ np.linalg.inv(edges(initial))
+    F = edges(current) @ inverse(edges(initial))
     values, vectors = np.linalg.eigh(F @ np.swapaxes(F, 1, 2))
     log2 = np.einsum("cij,cj,ckj->cik", vectors, 0.5 * np.log(values), vectors)
     log3 = np.zeros((len(F), 3, 3))
