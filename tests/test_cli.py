@@ -161,7 +161,7 @@ def test_run_refuses_folders_it_did_not_write_before_solving(refusing, capsys, o
 
 
 def test_a_second_run_replaces_the_first_result(tmp_path, monkeypatch):
-    from soilwater.results import MARKER
+    from soilwater.targets import MARKER
 
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "run"

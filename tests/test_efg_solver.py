@@ -8,7 +8,7 @@ from soilwater.studies.harness.metrics import (axis_profile, mandel_errors, osci
                                                path_error, terzaghi_errors)
 from soilwater.efg.solver import solve
 from soilwater.case.loader import load_case
-from soilwater.results import MARKER
+from soilwater.targets import MARKER
 
 
 @pytest.fixture(scope="module")

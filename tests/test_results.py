@@ -11,7 +11,7 @@ import pyvista
 from soilwater.methods import METHODS
 from soilwater.errors import InputError
 from soilwater.case.loader import load_case
-from soilwater.results import MARKER, check_output_folder
+from soilwater.targets import MARKER, check_output_folder
 
 FAST = ["time.steps=3", "time.end=1.0"]  # terzaghi in three steps: about a second
 

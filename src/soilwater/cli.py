@@ -137,7 +137,7 @@ def interruptible():
 def _parser():
     from soilwater.methods import METHODS
     from soilwater.material.driver import TESTS
-    from soilwater.results import MARKER
+    from soilwater.targets import MARKER
 
     parser = argparse.ArgumentParser(
         prog="soilwater",
@@ -258,7 +258,7 @@ def _show(args):
 def _run(args):
     from soilwater.case.loader import load_case
     from soilwater.methods import solve
-    from soilwater.results import check_output_folder
+    from soilwater.targets import check_output_folder
 
     check_output_folder(args.out)  # before any work: a bad --out fails at once
     case = load_case(args.case, args.set)
@@ -279,7 +279,7 @@ def json_line(summary):
 def _path(args):
     from soilwater.material.driver import PATH_COLUMNS, run_test
     from soilwater.material.presets import load_material
-    from soilwater.results import check_output_file, write_csv
+    from soilwater.targets import check_output_file, write_csv
 
     check_output_file(args.out, PATH_COLUMNS)  # before any work
     material = load_material(args.material, model=args.model, ocr=args.ocr)

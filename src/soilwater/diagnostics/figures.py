@@ -2,7 +2,7 @@
 
 import matplotlib.pyplot as plt
 
-from soilwater.results import SOFTWARE
+from soilwater.targets import SOFTWARE
 
 
 def infsup(table, slopes, path):

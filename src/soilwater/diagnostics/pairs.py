@@ -90,7 +90,7 @@ def write(out, methods, sizes=SIZES, boundaries=BOUNDARIES, overrides=()):
         The CSV and the figure.
     """
     from soilwater.diagnostics import figures as stability_figures
-    from soilwater.results import check_output_file, naming, publish, write_csv
+    from soilwater.targets import check_output_file, naming, publish, write_csv
 
     out = Path(out)
     require(out.suffix == ".csv", f"--out {out}: name a CSV file, e.g. infsup.csv")
