@@ -14,14 +14,13 @@ import numpy as np
 
 from soilwater.case.boundary_validation import (read_boundary, require_coupled_footings,
                                                 require_segments_on_nodes)
-from soilwater.case.entries import (check_keys, duration, integer, number, pair, section,
-                                    string)
+from soilwater.case.entries import check_keys, integer, number, pair, section, string
 from soilwater.case.grid import LAYOUTS, Discretisation
-from soilwater.case.model import (ANALYSES, MAX_STEPS, ON_FAILURE, STRESS_STARTS, Case,
-                                  Diagnostics, Geometry, Gravity, Initial, Loading, Probe,
-                                  TimeStepping)
-from soilwater.case.schema import (ASPECTS, GEOMETRIC, GRADINGS, KEYS, LENGTHS,
+from soilwater.case.model import (ANALYSES, STRESS_STARTS, Case, Diagnostics, Geometry,
+                                  Gravity, Initial, Probe)
+from soilwater.case.schema import (ASPECTS, GRADINGS, KEYS, LENGTHS,
                                    MAX_TRIANGLE_ORDER, SCALES, SECTIONS)
+from soilwater.case.time_validation import read_loading, read_time
 from soilwater.efg.settings import (CELLS, CORRECTIONS, DEFAULT_SCALE, ESSENTIAL,
                                     INTEGRATIONS, STABILISATIONS, EFGSettings, Weight)
 from soilwater.errors import InputError, require
@@ -55,7 +54,7 @@ def case_from_dict(data):
     geometry = _geometry(section(data, "geometry"))
     material_spec, fluid = _material(section(data, "material"))
     probes = _probes(section(data, "probes", {}), geometry)
-    loading = _loading(section(data, "loading", {}))
+    loading = read_loading(section(data, "loading", {}))
     case = Case(
         name=string(data, "name", "case", "case"),
         description=string(data, "description", "case", ""),
@@ -66,7 +65,7 @@ def case_from_dict(data):
         initial=_initial(section(data, "initial", {})),
         boundary=read_boundary(section(data, "boundary"), loading, geometry),
         loading=loading,
-        time=_time(section(data, "time")),
+        time=read_time(section(data, "time")),
         probes=probes,
         exact=_exact(section(data, "exact", {})),
         efg=_efg(section(data, "efg", {})),
@@ -360,68 +359,6 @@ def _fem(table):
             f"equilateral, 0 degenerate): use e.g. {defaults.remesh_quality:g}")
     return FEMSettings(remesh=string(table, "remesh", "fem", defaults.remesh, REMESH),
                        remesh_quality=quality)
-
-
-def _loading(table):
-    check_keys(table, KEYS["loading"], "loading")
-    L = table.get("velocity_gradient", ((0.0, 0.0), (0.0, 0.0)))
-    require(isinstance(L, (list, tuple)) and len(L) == 2, "loading.velocity_gradient "
-            "must be [[L11, L12], [L21, L22]] (1/s)")
-    L = tuple(pair(row, "loading.velocity_gradient row") for row in L)
-    load = table.get("load", 1.0)
-    if not isinstance(load, (list, tuple)):
-        return Loading(L, number(table, "load", "loading", 1.0))
-    points = tuple(_load_point(p) for p in load)
-    times = [t for t, _ in points]
-    require(points and times[0] >= 0 and all(np.diff(times) > 0), "loading.load: give "
-            "[t, factor] points with increasing times t >= 0, or one number (step load)")
-    return Loading(L, points)
-
-
-def _load_point(value):
-    """A ``loading.load`` point ``[t, factor]``: the time [s] in any :func:`duration`
-    form."""
-    require(isinstance(value, (list, tuple)) and len(value) == 2, f"loading.load point "
-            f"{value!r} must be [t, factor], e.g. [\"1 d\", 1.0]")
-    return (duration(value[0], "loading.load point's time"),
-            number({"factor": value[1]}, "factor", "loading.load point"))
-
-
-def _time(table):
-    check_keys(table, KEYS["time"], "time")
-    require("end" in table, "time.end is missing: set it (seconds or e.g. \"60 yr\")")
-    end = duration(table["end"], "time.end")
-    require(end > 0, f"time.end = {table['end']!r} must be positive")
-    on_failure = string(table, "on_failure", "time", "error", ON_FAILURE)
-    output = _output(table.get("output"), end)
-    if "steps" in table:
-        require(not set(GEOMETRIC) & set(table), "time: give either steps or dt0, "
-                "growth, dt_max, not both")
-        steps = integer(table, "steps", "time")
-        require(1 <= steps <= MAX_STEPS, f"time.steps = {steps} must lie in 1..{MAX_STEPS}")
-        return TimeStepping(end=end, steps=steps, output=output, on_failure=on_failure)
-    require(set(GEOMETRIC) <= set(table), "time: give steps (equal steps) or all of dt0, "
-            "growth, dt_max (geometric steps)")
-    dt0, dt_max = (duration(table[key], f"time.{key}") for key in ("dt0", "dt_max"))
-    growth = number(table, "growth", "time")
-    require(0 < dt0 <= dt_max, f"time.dt0 = {table['dt0']!r} must be positive and at most "
-            f"time.dt_max = {table['dt_max']!r}")
-    require(growth > 1, f"time.growth = {growth} must exceed 1 (t_(n+1) = growth t_n)")
-    return TimeStepping(end=end, dt0=dt0, growth=growth, dt_max=dt_max, output=output,
-                        on_failure=on_failure)
-
-
-def _output(value, end):
-    """``time.output``: increasing times in (0, end] [s], or None."""
-    if value is None:
-        return None
-    require(isinstance(value, (list, tuple)) and value, "time.output must be a list of "
-            "times, e.g. [\"0.1 yr\", \"1 yr\", \"10 yr\"]")
-    times = [duration(v, "time.output entry") for v in value]
-    require(all(0 < t <= end * (1 + 1e-9) for t in times) and all(np.diff(times) > 0),
-            f"time.output = {value!r}: give increasing times after 0 and at most time.end "
-            "(the fields at t = 0 are always written)")
-    return tuple(min(t, end) for t in times)
 
 
 def _probes(table, geometry):
