@@ -65,8 +65,8 @@ def _build(cls, case):
     return model
 
 
-def _init(self, model, points, disc, t0, t1, timings):
-    _ORIGINAL["init"](self, model, points, disc, t0, t1, timings)
+def _init(self, model, points, disc, t0, t1, timings, load=None):
+    _ORIGINAL["init"](self, model, points, disc, t0, t1, timings, load)
     self.P = None
     if getattr(model, "coarse", None) is not None:
         s = model.case.efg

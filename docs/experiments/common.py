@@ -141,13 +141,13 @@ def _parts(case, method):
             fem._snapshot)
 
 
-def _efg_system(model, points, t0, t1, timings):
+def _efg_system(model, points, t0, t1, timings, load=None):
     disc = discretise(model, points.nodes, np.vstack([points.nodes, points.probes]),
                       timings, points.cells)
-    return EFGSystem(model, points, disc, t0, t1, timings), disc
+    return EFGSystem(model, points, disc, t0, t1, timings, load), disc
 
 
-def _efg_finish(model, system, disc, t1, timings):
+def _efg_finish(model, system, disc, t1, timings, load=None):
     done = system.finish()
     with timed(timings, "cells_s"):
         done.cells = background_cells(model, done.nodes)
@@ -157,13 +157,13 @@ def _efg_finish(model, system, disc, t1, timings):
     return done
 
 
-def _fem_system(model, current, t0, t1, timings):
-    disc = fem_discretise(model, current.topology, current.vertices, t1, timings)
-    return FEMSystem(model, current, disc, t0, t1, timings), disc
+def _fem_system(model, current, t0, t1, timings, load=None):
+    disc = fem_discretise(model, current.topology, current.vertices, t1, timings, load)
+    return FEMSystem(model, current, disc, t0, t1, timings, load), disc
 
 
-def _fem_finish(model, system, disc, t1, timings):
-    return remesh(model, system.finish(), t1, timings)
+def _fem_finish(model, system, disc, t1, timings, load=None):
+    return remesh(model, system.finish(), t1, timings, load)
 
 
 def solve(case, method, layout=None, system=None, on_step=None, snapshots=None):
@@ -195,15 +195,16 @@ def solve(case, method, layout=None, system=None, on_step=None, snapshots=None):
         return _library_solve(case, method)
     model, state, build, finish, row, snapshot = _parts(case, method)
 
-    def step(current, t0, t1, stats):
+    def step(current, t0, t1, stats, load):
         if on_step is not None:
             on_step(model, current, t0, t1)
-        newton_system, disc = build(model, current, t0, t1, stats["timings"])
+        newton_system, disc = build(model, current, t0, t1, stats["timings"], load)
         if layout is not None:
             newton_system.layout = layout(newton_system.layout)
         iterations, residual = newton(newton_system if system is None
                                       else system(newton_system), stats)
-        return finish(model, newton_system, disc, t1, stats["timings"]), iterations, residual
+        return (finish(model, newton_system, disc, t1, stats["timings"], load), iterations,
+                residual)
 
     def kept(current, t):
         taken = snapshot(model, current, t)

@@ -168,3 +168,9 @@ class Boundary:
     def segments(self):
         """``(edge name, Segment)`` pairs of every named segment, edges in EDGES order."""
         return tuple((name, seg) for name, edge in self.items() for seg in edge.segments)
+
+    @property
+    def drained(self):
+        """True if p_w = 0 is imposed anywhere on the boundary (an edge or a segment)."""
+        return any(edge.drained for _, edge in self.items()) or any(
+            seg.water == "drained" for _, seg in self.segments())

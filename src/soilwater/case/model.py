@@ -118,6 +118,23 @@ class Loading:
         return np.interp(t, times, factors)
 
 
+    def jump(self, t):
+        """The jump of the load factor at time t [s], ``f(t+) - f(t)``: all of ``f(0+)``
+        at t = 0 (the start is in equilibrium with no load: a step load, or a table
+        whose factor at 0 is not 0), else 0 (tables are continuous).
+
+        Examples
+        --------
+        >>> Loading(load=2.0).jump(0.0), Loading(load=2.0).jump(1.0)
+        (2.0, 0.0)
+        >>> Loading(load=((0.0, 0.0), (1.0, 1.0))).jump(0.0)
+        0.0
+        """
+        if t > 0:
+            return 0.0
+        return float(self.load) if isinstance(self.load, float) else float(self.load[0][1])
+
+
 @dataclass(frozen=True)
 class TimeStepping:
     """End time [s] and either ``steps`` or geometric ``dt0``, ``growth``, ``dt_max``;
@@ -312,20 +329,22 @@ class Case:
         return np.concatenate([i, j[1:] * nx + nx - 1, (ny - 1) * nx + i[-2::-1],
                                j[-2:0:-1] * nx])
 
-    def plate_force(self, t):
+    def plate_force(self, t, load=None):
         """Total force on the rigid plate at time t, per unit thickness (y, tension +).
 
         ``traction[1] x load factor x initial edge length`` of the edge whose uy is rigid,
         or ``-force x load factor`` of a load-controlled footing
         (:class:`~soilwater.case.boundary.Segment`; at most one plate per case); zero
-        without a plate.
+        without a plate. ``load``: the load factor, if not the case's at t (a step load
+        spread over a cut-back level, :func:`soilwater.nonlinear.march.march`).
         """
+        load = self.loading.factor(t) if load is None else load
         for _, edge in self.boundary.items():
             if edge.uy == "rigid":
-                return float(edge.traction[1] * self.loading.factor(t) * self.geometry.width)
+                return float(edge.traction[1] * load * self.geometry.width)
         for _, seg in self.boundary.segments():
             if seg.load_controlled:
-                return float(-seg.force * self.loading.factor(t))
+                return float(-seg.force * load)
         return 0.0
 
     def edge_conditions(self, side, points):

@@ -58,7 +58,7 @@ def due(model, cells):
     return cell_quality(cells.cells)[1].min() < model.case.efg.rebuild_quality
 
 
-def rebuild(model, points, t, stats):
+def rebuild(model, points, t, stats, load=None):
     """``points`` on new triangles, carried and re-equilibrated (module docstring), when
     their cells are :func:`due` for it; else ``points`` unchanged.
 
@@ -72,6 +72,8 @@ def rebuild(model, points, t, stats):
     stats : dict
         The step's statistics (:func:`soilwater.nonlinear.newton.newton`'s), added to;
         a rebuild appends its :func:`record` to ``stats["rebuild_records"]``.
+    load : float, optional
+        The load factor at ``t`` if not the case's (:func:`soilwater.nonlinear.march.march`).
 
     Returns
     -------
@@ -102,7 +104,7 @@ def rebuild(model, points, t, stats):
     start = replace(points, stress=stress, state=state, stretching=stretching, cells=new)
     disc = discretise(model, nodes, np.vstack([nodes, points.probes]), stats["timings"],
                       new)
-    system = System(model, start, disc, t, t, stats["timings"])
+    system = System(model, start, disc, t, t, stats["timings"], load)
     _, before = system.residual()
     iterations, after = newton(system, stats)
     done = system.finish()

@@ -157,7 +157,7 @@ def _cells(model, nodes, previous=None):
     return nodal_cells(nodes, triangles)
 
 
-def _step(model, points, t0, t1, stats):
+def _step(model, points, t0, t1, stats, load=None):
     """One step on the configuration of ``points``: new points, iterations, residual.
 
     The new points carry the background cells of their own configuration, on which the
@@ -167,7 +167,7 @@ def _step(model, points, t0, t1, stats):
     the iterations count the re-equilibration's."""
     disc = discretise(model, points.nodes, np.vstack([points.nodes, points.probes]),
                        stats["timings"], points.cells)
-    system = System(model, points, disc, t0, t1, stats["timings"])
+    system = System(model, points, disc, t0, t1, stats["timings"], load)
     iterations, residual = newton(system, stats)
     done = system.finish()
     with timed(stats["timings"], "cells_s"):
@@ -176,7 +176,7 @@ def _step(model, points, t0, t1, stats):
     if model.case.diagnostics.uniqueness:
         done.uniqueness = _uniqueness(model, disc, system.domain_tangent(), system.n)
     if model.gauss:
-        done, more = rebuild(model, done, t1, stats)
+        done, more = rebuild(model, done, t1, stats, load)
         iterations += more
     return done, iterations, residual
 

@@ -50,7 +50,7 @@ class System:
     :meth:`tangent` and :meth:`finish`.
     """
 
-    def __init__(self, model, points, disc, t0, t1, timings):
+    def __init__(self, model, points, disc, t0, t1, timings, load=None):
         case, bc, su = model.case, disc.bc, disc.su
         self.model, self.points, self.disc, self.timings = model, points, disc, timings
         self.dt, self.n = t1 - t0, len(points.nodes)
@@ -72,8 +72,9 @@ class System:
         initial = cauchy_traction(model.sigma0_bp, disc.bp.normal)     # (G, 2)
         if self.nitsche is not None:     # held components: their flux carries it
             initial = np.where(self.nitsche.terms.mask[:, :2], 0.0, initial)
-        self.traction = initial + bc.traction * bc.loaded * case.loading.factor(t1)
-        self.plate_force = case.plate_force(t1)
+        load = case.loading.factor(t1) if load is None else load
+        self.traction = initial + bc.traction * bc.loaded * load
+        self.plate_force = case.plate_force(t1, load)
         self.rigid_w = (self.nitsche is None) * self.alpha_u * disc.bp.weights * bc.rigid
         self.c_mean = disc.tp.phi.T @ disc.w
         self.du, self.p, self.plate, self.lam = (np.zeros(2 * self.n), points.p.copy(),

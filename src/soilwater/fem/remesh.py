@@ -19,7 +19,7 @@ from soilwater.geometry.triangulation import close_boundary, conforms, delaunay_
 from soilwater.nonlinear.history import timed
 
 
-def remesh(model, current, t, timings):
+def remesh(model, current, t, timings, load=None):
     """``current`` on the Delaunay triangles of its vertices when ``fem.remesh`` asks for
     it and its worst element's quality is below ``fem.remesh_quality`` (module
     docstring); unchanged when those triangles are the mesh's own, and only counted
@@ -28,7 +28,8 @@ def remesh(model, current, t, timings):
 
     The state is carried (:func:`soilwater.fem.transfer.transfer`) and made admissible;
     the vertices, pore pressures and vertex velocities stay. ``remesh_residual`` is the
-    scaled equilibrium residual of the new state at ``t`` (:func:`imbalance`).
+    scaled equilibrium residual of the new state at ``t`` under the load factor ``load``
+    (the case's at t if None; :func:`imbalance`).
     """
     settings, space, vertices = model.case.fem, current.topology.space, current.vertices
     if settings.remesh == "never":
@@ -61,7 +62,7 @@ def remesh(model, current, t, timings):
                   velocity=vertex_interpolant(ub, topology.space.mesh0.facets,
                                               velocity).T.ravel(),
                   remeshes=current.remeshes + 1)
-    new.remesh_residual = imbalance(model, new, t, timings)
+    new.remesh_residual = imbalance(model, new, t, timings, load)
     return new
 
 
@@ -72,17 +73,17 @@ def _same_triangles(triangles, corners):
                                                                  axis=0))
 
 
-def imbalance(model, current, t, timings):
+def imbalance(model, current, t, timings, load=None):
     """The scaled residual (:func:`scaled_norm`, in units of the Newton tolerance's scales)
     of the state ``current`` on its own mesh at time t with no increment: the equilibrium
     imbalance of its stress (the continuity rows vanish with no increment and dt = 0)."""
     topology = current.topology
-    disc = discretise(model, topology, current.vertices, t, timings)
+    disc = discretise(model, topology, current.vertices, t, timings, load)
     con, n = topology.constraints, len(current.stress)
     x = np.concatenate([np.zeros(2 * disc.u.n), current.p])
     R, _ = domain_residual(model, disc, current, x, current.stress, np.ones(n),
                      np.broadcast_to(np.eye(2), (n, 2, 2)), 0.0)
     reduced = con.T.T @ R
     if len(con.plate):
-        reduced[-1] -= model.case.plate_force(t)
+        reduced[-1] -= model.case.plate_force(t, load)
     return scaled_norm(reduced, con, model.scales.force, model.scales.volume, 0.0)

@@ -144,13 +144,13 @@ def _initial_state(model):
                  reactions=np.zeros(len(case.boundary.segments())))
 
 
-def _step(model, current, t0, t1, stats):
+def _step(model, current, t0, t1, stats, load=None):
     """One step on the mesh at ``current.vertices``, then the re-meshing if it is due:
     new state, iterations, residual."""
-    disc = discretise(model, current.topology, current.vertices, t1, stats["timings"])
-    system = System(model, current, disc, t0, t1, stats["timings"])
+    disc = discretise(model, current.topology, current.vertices, t1, stats["timings"], load)
+    system = System(model, current, disc, t0, t1, stats["timings"], load)
     iterations, residual = newton(system, stats)
-    return remesh(model, system.finish(), t1, stats["timings"]), iterations, residual
+    return remesh(model, system.finish(), t1, stats["timings"], load), iterations, residual
 
 
 def _history_row(model, current, t, dt, info):

@@ -36,16 +36,17 @@ class Discretisation:
     external: np.ndarray     # (2 n_u,) boundary forces at t_(n+1) [force per thickness]
 
 
-def discretise(model, topology, vertices, t1, timings):
+def discretise(model, topology, vertices, t1, timings, load=None):
     """Bases on the mesh of ``topology`` at ``vertices`` and the boundary forces at
-    ``t1``; phase times added to ``timings``."""
+    ``t1`` (under the load factor ``load`` if not the case's at t1); phase times added to
+    ``timings``."""
     space = topology.space
     with timed(timings, "cells_s"):
         mesh = space.moved(vertices)
     with timed(timings, "shape_functions_s"):
         ub, pb = cell_bases(mesh, space.pair)
         external = np.zeros(2 * space.n_u)
-        factor = model.case.loading.factor(t1)
+        factor = model.case.loading.factor(t1) if load is None else load
         for name, edge in model.case.boundary.items():
             if len(space.edge_facets[name]) == 0:
                 continue
@@ -71,11 +72,11 @@ class System:
     through ``Constraints.T``, plus the mean-pressure multiplier when pinned.
     """
 
-    def __init__(self, model, current, disc, t0, t1, timings):
+    def __init__(self, model, current, disc, t0, t1, timings, load=None):
         case, con, n_u = model.case, current.topology.constraints, disc.u.n
         self.model, self.current, self.disc, self.timings = model, current, disc, timings
         self.con = con
-        self.dt, self.t1, self.n_u = t1 - t0, t1, n_u
+        self.dt, self.t1, self.load, self.n_u = t1 - t0, t1, load, n_u
         x = np.concatenate([current.velocity * self.dt, current.p])
         x[con.prescribed] = prescribed_increment(
             case.loading.L, disc.doflocs.T[con.prescribed % n_u], self.dt)[
@@ -103,7 +104,7 @@ class System:
         self.R = R
         reduced = con.T.T @ R
         if len(con.plate):
-            reduced[-1] -= model.case.plate_force(self.t1)
+            reduced[-1] -= model.case.plate_force(self.t1, self.load)
         sc = model.scales
         pin = self.c_mean @ (self.x - np.concatenate([np.zeros(2 * n_u), self.current.p]))
         residual = scaled_norm(reduced, con, sc.force, sc.volume, sc.pin_pressure * pin)

@@ -5,7 +5,8 @@ bases, cells, assembly, essential conditions); the run around the step is here:
 
 * :func:`run`: timers, the march, the summary every result carries;
 * :func:`march`: the case's time levels, a failing level halved up to :data:`MAX_CUTS`
-  times.
+  times; a level that starts with a jump of the load (a step load at t = 0) spreads the
+  jump over its halves.
 
 The step itself is Newton's method (:mod:`soilwater.nonlinear.newton`); its history rows
 are :mod:`soilwater.nonlinear.history`'s.
@@ -39,7 +40,8 @@ def run(case, method, options, current, step, row, snapshot, summary, progress=T
     current : object
         The solver's state at t = 0.
     step : callable
-        ``step(current, t0, t1, stats) -> (current, iterations, residual)``, adding to
+        ``step(current, t0, t1, stats, load) -> (current, iterations, residual)`` with
+        ``load`` the load factor at t1 (:func:`march`), adding to
         ``stats["timings"]`` (keys :data:`soilwater.nonlinear.history.TIMERS`) and the
         counts of :func:`soilwater.nonlinear.newton.newton`.
     row, snapshot : callable
@@ -59,7 +61,8 @@ def run(case, method, options, current, step, row, snapshot, summary, progress=T
     """
     stats = {**new_counts(), "timings": dict.fromkeys(TIMERS, 0.0)}
     tic = time.perf_counter()
-    history, snapshots = march(case, current, lambda c, t0, t1: step(c, t0, t1, stats),
+    history, snapshots = march(case, current,
+                               lambda c, t0, t1, load: step(c, t0, t1, stats, load),
                                row, snapshot, stats, progress, desc=f"{method} {case.name}")
     stats["timings"]["total_s"] = time.perf_counter() - tic
     return Result(case, method, options, history, snapshots,
@@ -76,7 +79,8 @@ def march(case, current, step, row, snapshot, stats, progress=True, desc=""):
     current : object
         The solver's state at t = 0.
     step : callable
-        ``step(current, t0, t1) -> (current, iterations, residual)``; raises
+        ``step(current, t0, t1, load) -> (current, iterations, residual)``, ``load`` the
+        load factor at t1 (``case.loading.factor(t1)``, but see Notes); raises
         :class:`ConvergenceError` (or ``FloatingPointError``) when it fails.
     row : callable
         ``row(current, t, dt, info) -> dict``: the history row of a converged level.
@@ -102,6 +106,15 @@ def march(case, current, step, row, snapshot, stats, progress=True, desc=""):
     snapshots : list of Snapshot
         At t = 0 and after every level (only at ``time.output``'s when the case gives
         them).
+
+    Notes
+    -----
+    A level that fails is cut into 2, 4, ... 2^MAX_CUTS equal sub-steps. A jump of the
+    load factor at the level's start (:meth:`soilwater.case.model.Loading.jump`: a step
+    load at t = 0) is then applied in equal parts, one per sub-step, instead of all in
+    the first: the step load becomes a ramp over the first level, which changes the
+    drainage during that level by O(dt), the order of the time integration. A short
+    first level (``time.dt0``) keeps the first response close to the undrained one.
     """
     stats.update({"newton_iterations": 0, "cutbacks": 0, "max_residual": 0.0,
                   "stopped": None})
@@ -111,7 +124,7 @@ def march(case, current, step, row, snapshot, stats, progress=True, desc=""):
     try:
         for t0, t1 in zip(times[:-1], times[1:]):
             try:
-                current, info = _advance(current, step, t0, t1, stats)
+                current, info = _advance(current, step, t0, t1, stats, case)
             except ConvergenceError as err:
                 if case.time.on_failure != "stop" or not rows:
                     raise
@@ -132,27 +145,49 @@ def march(case, current, step, row, snapshot, stats, progress=True, desc=""):
     return history, snapshots
 
 
-def _advance(current, step, t0, t1, stats):
-    """One time level, halved while it fails (up to MAX_CUTS times)."""
-    dt = t1 - t0
+def _advance(current, step, t0, t1, stats, case):
+    """One time level, halved while it fails (up to MAX_CUTS times); a jump of the load
+    at t0 spread over the halves."""
+    loading = case.loading
+    dt, jump = t1 - t0, loading.jump(t0)
     for cut in range(MAX_CUTS + 1):
+        n = 2**cut
         try:
-            t, trial, iterations, residuals = t0, current, 0, []
+            trial, iterations, residuals = current, 0, []
             krylov = stats.get("linear_iterations", 0)
-            for _ in range(2**cut):
+            for k in range(1, n + 1):
+                t, end = t0 + (k - 1) * dt / n, (t0 + k * dt / n) if k < n else t1
+                load = float(loading.factor(end)) - jump * (n - k) / n
                 with np.errstate(all="ignore"):  # failures end in ConvergenceError
-                    trial, its, res = step(trial, t, t + dt / 2**cut)
-                t += dt / 2**cut
+                    trial, its, res = step(trial, t, end, load)
                 iterations += its
                 residuals.append(res)
             stats["cutbacks"] += cut
             stats["newton_iterations"] += iterations
             stats["max_residual"] = max(stats["max_residual"], *residuals)
             return trial, {"iterations": iterations, "residual": max(residuals),
-                           "substeps": 2**cut,
+                           "substeps": n,
                            "linear_iterations": stats.get("linear_iterations", 0) - krylov}
         except (ConvergenceError, FloatingPointError) as err:
             reason = err
     raise ConvergenceError(f"step t = {t0:g} -> {t1:g} s failed after {MAX_CUTS} halvings "
-                           f"of the time step ({reason}): reduce time steps or loading "
-                           "rate, or check the boundary conditions")
+                           f"of the time step ({reason}): {_advice(case)}")
+
+
+def _advice(case):
+    """What to do about a level that fails after every halving.
+
+    After a step load on a drained boundary, a short step drains a skin thinner than the
+    node spacing, where a soft soil compresses at once: a discretisation that cannot
+    follow that skin (fixed finite elements) fails the more, the shorter the step. This
+    is the nonlinear face of the minimum time step of consolidation, about h^2 / (6 c_v)
+    for linear elements (Vermeer and Verruijt 1981): halving cannot help, longer first
+    steps or a ramped load can.
+    """
+    if case.loading.jump(0.0) and case.boundary.drained:
+        return ("the step load drains a skin thinner than the node spacing at the drained "
+                "boundary, which shorter steps make thinner (the minimum time step of "
+                "consolidation, about h^2 / (6 c_v)): lengthen the first steps (time.dt0, "
+                "e.g. 10 or 100 times), refine the nodes at the drained boundary, or ramp "
+                "the load over a first interval (loading.load = [[0, 0], [t1, 1]])")
+    return "reduce time steps or loading rate, or check the boundary conditions"

@@ -57,9 +57,7 @@ class Scales:
         modulus = float(np.median(material.constrained_modulus(p, state["v"])))
         free = any({"free", "rigid"} & (kx | ky) for kx, ky in
                    (edge.kinds(case.edge_length(side)) for side, edge in case.boundary.items()))
-        drained = any(e.drained or any(s.water == "drained" for s in e.segments)
-                      for e in edges)
-        pin = case.fluid.storage == 0 and not free and not drained
+        pin = case.fluid.storage == 0 and not free and not case.boundary.drained
         weight = buoyant_weight(case, state["v"]).max() * case.geometry.height
         return cls(max([abs(effective).max(), *tractions, weight,
                         *_footing_stresses(case, modulus), 1e-12]),
