@@ -25,6 +25,7 @@ import numpy as np
 
 from soilwater.geometry.triangulation import delaunay_triangles
 from soilwater.material.kinematics import IDENTITY, inverse
+from soilwater.material.regions import fluid_at
 from soilwater.physics.geostatic import G_N
 
 #: Unit of every field written (``-``: dimensionless). Point data: ``u`` displacement;
@@ -82,13 +83,16 @@ def mesh(snapshot, case):
                        cell_data={k: [v] for k, v in cell_data.items()})
 
 
-def permeability(case, v):
-    """``{"permeability": k}`` [m/s] at specific volumes v when k depends on the void
-    ratio (``material.permeability_law``), else ``{}``: the snapshot field."""
+def permeability(case, state):
+    """``{"permeability": k}`` [m/s] at the points of ``state`` (its specific volumes
+    ``v``, and ``region`` with material regions) when k varies (with the void ratio,
+    ``material.permeability_law``, or by region), else ``{}``: the snapshot field."""
     fluid = case.fluid
-    if fluid.permeability_law == "constant":
+    if "region" in state:
+        fluid = fluid_at(fluid, case.material(), state)
+    elif fluid.permeability_law == "constant":
         return {}
-    return {"permeability": fluid.mobility_at(v)[0] * fluid.gamma_w}
+    return {"permeability": fluid.mobility_at(state["v"])[0] * fluid.gamma_w}
 
 
 def derived(case, points, data):
@@ -99,8 +103,8 @@ def derived(case, points, data):
     fluid = case.fluid
     if "v" in data:
         out["e"] = data["v"] - 1.0
-        out["k"] = permeability(case, data["v"]).get("permeability",
-                                                     np.full(len(points), fluid.permeability))
+        out["k"] = permeability(case, data).get("permeability",
+                                                np.full(len(points), fluid.permeability))
     if "p_w" not in data:               # a static (dry) analysis
         return out
     hydrostatic = (fluid.gamma_w * case.gravity.g / G_N

@@ -33,7 +33,8 @@ HISTORY_UNITS = {
     "settlement": "m", "iterations": "-", "substeps": "-", "residual": "-",
     "linear_iterations": "-", "uniqueness": "-", "min_angle": "degree",
     "min_quality": "-", "min_rcond": "-", "displacement": "-", "stress": "-",
-    "energy": "-", "rebuilds": "-", "p_w@": "kPa", "settlement@": "m", "pressure@": "kPa",
+    "energy": "-", "rebuilds": "-", "p_w@": "kPa", "ux@": "m", "uy@": "m", "settlement@": "m",
+    "pressure@": "kPa",
 }
 
 #: Units of a snapshot's in-memory fields (:attr:`Snapshot.point_data`), as

@@ -1,9 +1,11 @@
-"""Boundary conditions of a case: the four edges, their kinds and named segments.
+"""Boundary conditions of a case: the edges, their kinds and named segments.
 
-Each edge of the rectangle is an :class:`Edge` (kinds of ux and uy, a total traction
+Each edge of the rectangle, or boundary group of a mesh (a physical curve,
+:mod:`soilwater.geometry.mesh`), is an :class:`Edge` (kinds of ux and uy, a total traction
 [kPa], tension positive, and a water condition); a :class:`Segment` overrides the kinds on
-a part of an edge, e.g. a rigid strip footing. :class:`Boundary` holds the four edges in
-:data:`EDGES` order. Coordinates are those of the initial configuration [m].
+a part of a rectangle's edge, e.g. a rigid strip footing. :class:`Boundary` holds the
+edges by name: the rectangle's four in :data:`EDGES` order, or the mesh's groups.
+Coordinates are those of the initial configuration [m].
 """
 
 from dataclasses import dataclass
@@ -83,13 +85,48 @@ class Segment:
 @dataclass(frozen=True)
 class Edge:
     """Conditions on one edge: kinds of ux and uy, total traction [kPa], water condition,
-    and named segments (:class:`Segment`) that override the kinds on parts of it."""
+    and named segments (:class:`Segment`) that override the kinds on parts of it.
+
+    ``traction`` is ``(tx, ty)``, ``"exact"`` (the case's exact solution's), or a
+    profile ``((x, tx, ty), ...)``: piecewise linear in the initial x [m], constant
+    beyond its ends (an embankment's trapezoid on the ground surface).
+    """
 
     ux: str = "free"
     uy: str = "free"
-    traction: tuple[float, float] = (0.0, 0.0)
+    traction: tuple = (0.0, 0.0)
     water: str = "impermeable"
     segments: tuple[Segment, ...] = ()
+
+    @property
+    def profiled(self):
+        """True when the traction varies along x (a profile)."""
+        return self.traction != "exact" and len(self.traction) > 0 and isinstance(
+            self.traction[0], tuple)
+
+    def traction_at(self, points):
+        """The traction (P, 2) [kPa] at initial positions ``points`` (P, 2) [m] (not
+        for ``"exact"``).
+
+        Examples
+        --------
+        >>> Edge(traction=((0.0, 0.0, -10.0), (2.0, 0.0, 0.0))).traction_at(
+        ...     [[1.0, 5.0], [3.0, 5.0]]).tolist()
+        [[0.0, -5.0], [0.0, 0.0]]
+        """
+        x = np.atleast_2d(np.asarray(points, float))[:, 0]
+        if not self.profiled:
+            return np.broadcast_to(np.asarray(self.traction, float), (len(x), 2)).copy()
+        table = np.asarray(self.traction, float)
+        return np.column_stack([np.interp(x, table[:, 0], table[:, k]) for k in (1, 2)])
+
+    @property
+    def largest_traction(self):
+        """The largest traction component in size [kPa] (0 for ``"exact"``)."""
+        if self.traction == "exact":
+            return 0.0
+        values = np.asarray(self.traction, float)
+        return float(np.abs(values[:, 1:] if self.profiled else values).max())
 
     @property
     def drained(self):
@@ -154,16 +191,22 @@ def along(side, points):
 
 @dataclass(frozen=True)
 class Boundary:
-    """The four edges of the rectangle."""
+    """The named edges: the rectangle's four (in :data:`EDGES` order) or a mesh's boundary
+    groups (in :attr:`soilwater.geometry.mesh.Mesh.groups` order); ``boundary.top`` is the
+    edge named ``top``."""
 
-    left: Edge
-    right: Edge
-    bottom: Edge
-    top: Edge
+    edges: tuple[tuple[str, Edge], ...]
+
+    def __getattr__(self, name):
+        if not name.startswith("__") and name != "edges":
+            for key, edge in self.edges:
+                if key == name:
+                    return edge
+        raise AttributeError(name)
 
     def items(self):
-        """``(name, Edge)`` pairs in the order left, right, bottom, top."""
-        return tuple((name, getattr(self, name)) for name in EDGES)
+        """``(name, Edge)`` pairs in the boundary's order."""
+        return self.edges
 
     def segments(self):
         """``(edge name, Segment)`` pairs of every named segment, edges in EDGES order."""

@@ -1,4 +1,5 @@
-"""Validation of ``[boundary]``: the four edges, their named segments and the supports.
+"""Validation of ``[boundary]``: the four edges (or a mesh's boundary groups), their
+named segments and the supports.
 
 :func:`read_boundary` reads the section into a :class:`~soilwater.case.boundary.Boundary`
 and refuses conflicting corners, more than one rigid plate and a body free to move
@@ -23,14 +24,16 @@ _CORNERS = (("left", "bottom"), ("left", "top"), ("right", "bottom"), ("right", 
 
 
 def read_boundary(table, loading, geometry):
+    if geometry.mesh is not None:
+        return _mesh_boundary(table, loading, geometry.mesh)
     check_keys(table, EDGES, "boundary", "edge")
     for side in EDGES:
         require(side in table, f"boundary: edge {side!r} is missing: add [boundary.{side}] "
                 "(every edge of the rectangle exactly once)")
     length = {"left": geometry.height, "right": geometry.height,
               "bottom": geometry.width, "top": geometry.width}
-    boundary = Boundary(**{side: _edge(section(table, side), side, loading, length[side])
-                           for side in EDGES})
+    boundary = Boundary(tuple((side, _edge(section(table, side), side, loading,
+                                           length[side])) for side in EDGES))
     corner = {("left", "bottom"): (0.0, 0.0), ("left", "top"): (geometry.height, 0.0),
               ("right", "bottom"): (0.0, geometry.width),
               ("right", "top"): (geometry.height, geometry.width)}
@@ -57,9 +60,8 @@ def _require_supports(boundary, length):
 
     ``fixed``, ``prescribed`` and ``exact`` restrain a component, and so does a
     velocity-controlled footing (:class:`~soilwater.case.boundary.Segment`) its uy; a
-    ``rigid`` plate (or a load-controlled footing) lets its edge settle. It would stop rotation, but
-    never
-    decides: the uy that stops y translation is on a horizontal edge (stopping rotation
+    ``rigid`` plate (or a load-controlled footing) lets its edge settle. It would stop
+    rotation, but never decides: the uy that stops y translation is on a horizontal edge (stopping rotation
     too) or on a vertical one, which may not meet the plate's edge with another kind.
     """
     kinds = {side: edge.kinds(length[side]) for side, edge in boundary.items()}
@@ -76,6 +78,46 @@ def _require_supports(boundary, length):
             "boundary: the body is not supported against rotation: restrain ux on the left "
             "or right edge or uy on the top or bottom edge (e.g. boundary.left.ux = "
             "\"fixed\")")
+
+
+def _mesh_boundary(table, loading, mesh):
+    """The boundary groups of a mesh: ``[boundary.NAME]`` for any of its physical curves
+    on the boundary, the others free, impermeable and unloaded; no segments, no rigid
+    plate; supported along x, y and against rotation."""
+    check_keys(table, mesh.groups, "boundary", "boundary group (physical curve of "
+               "geometry.mesh)")
+    ends = mesh.points[np.stack([mesh.loop, np.roll(mesh.loop, -1)])]
+    edges = []
+    for k, name in enumerate(mesh.groups):
+        spec = dict(section(table, name, {}))
+        where = f"boundary.{name}"
+        for key, value in spec.items():
+            require(not isinstance(value, dict), f"{where}.{key}: named segments are for "
+                    "the rectangle's edges: give that part of the boundary its own physical "
+                    "curve in the mesh")
+        d = np.ptp(ends[:, mesh.group == k].reshape(-1, 2), axis=0)
+        if "displacement" in spec:
+            require("ux" not in spec and "uy" not in spec,
+                    f"{where}: give either displacement or ux/uy, not both")
+            normal = "ux" if d[0] == 0 else "uy" if d[1] == 0 else None
+            spec.update(expand_displacement(spec.pop("displacement"), name, normal))
+        require("rigid" not in (spec.get("ux"), spec.get("uy")), f"{where}: 'rigid' "
+                "applies to a rectangle's top or bottom edge: use fixed or prescribed")
+        edges.append((name, _edge(spec, name, loading, mesh.group_length(name))))
+    boundary = Boundary(tuple(edges))
+    restrained = [[name for name, edge in edges if getattr(edge, c) in _RESTRAINED]
+                  for c in ("ux", "uy")]
+    for comp, names, axis in zip(("ux", "uy"), restrained, ("x", "y")):
+        require(names, f"boundary: the body is not supported along {axis} (no boundary "
+                f"group restrains {comp}): set a group's {comp} to \"fixed\", e.g. "
+                f"boundary.{mesh.groups[0]}.{comp} = \"fixed\"")
+    spread = [np.ptp(ends[:, np.isin(mesh.group, [mesh.groups.index(n) for n in names])]
+                     .reshape(-1, 2)[:, 1 - f]) for f, names in enumerate(restrained)]
+    require(max(spread) > 0, "boundary: the body is not supported against rotation (ux "
+            "is restrained only along one horizontal line and uy only along one vertical "
+            "line): restrain ux on a group that spans a height, or uy on one that spans a "
+            "width")
+    return boundary
 
 
 def _edge(table, side, loading, length):
@@ -95,7 +137,9 @@ def _edge(table, side, loading, length):
                 water=string(table, "water", where, "impermeable", WATER))
     require(edge.ux != "rigid" and (edge.uy != "rigid" or side in ("top", "bottom")),
             f"{where}: 'rigid' applies to uy of the top or bottom edge only")
-    for comp, t in zip(("ux", "uy"), np.broadcast_to(np.asarray(edge.traction, object), 2)):
+    values = (np.abs(np.asarray(edge.traction, float)[:, 1:]).max(axis=0) if edge.profiled
+              else np.broadcast_to(np.asarray(edge.traction, object), 2))
+    for comp, t in zip(("ux", "uy"), values):
         kind = getattr(edge, comp)
         require(kind != "prescribed" or np.any(loading.L),
                 f"{where}.{comp} = 'prescribed' needs a non-zero "
@@ -173,5 +217,16 @@ def require_segments_on_nodes(case):
 
 
 def _traction(value, where):
-    """``[tx, ty]`` or ``"exact"`` (from the case's exact solution)."""
-    return "exact" if value == "exact" else pair(value, where)
+    """``[tx, ty]``, ``"exact"`` (from the case's exact solution) or a profile ``[[x, tx,
+    ty], ...]`` (:class:`~soilwater.case.boundary.Edge`)."""
+    if value == "exact":
+        return "exact"
+    if not (isinstance(value, (list, tuple)) and value
+            and isinstance(value[0], (list, tuple))):
+        return pair(value, where)
+    form = (f"{where} = {value!r}: give [tx, ty] or a profile [[x, tx, ty], ...] of rows "
+            "with increasing x (m), piecewise linear in the initial x")
+    require(all(isinstance(row, (list, tuple)) and len(row) == 3 for row in value), form)
+    rows = tuple(tuple(number({"v": v}, "v", where) for v in row) for row in value)
+    require(len(rows) >= 2 and all(b[0] > a[0] for a, b in zip(rows, rows[1:])), form)
+    return rows

@@ -10,6 +10,9 @@ import numpy as np
 
 #: Node layouts: the grid nodes, or the grid nodes plus one node per cell centre.
 LAYOUTS = ("grid", "grid+centres")
+#: The layout of a case on a mesh (``geometry.mesh``): its vertices are the nodes, and
+#: ``[discretisation]`` stays empty.
+MESH = "mesh"
 
 
 @dataclass(frozen=True)
@@ -45,7 +48,9 @@ class Discretisation:
 
     def to_dict(self):
         """The ``[discretisation]`` table: ``x`` (``y``) instead of ``nx`` (``ny``) where
-        the grid is laid out in pieces."""
+        the grid is laid out in pieces; empty on a mesh."""
+        if self.layout == MESH:
+            return {}
         data = {k: v for k, v in asdict(self).items() if k not in ("x", "y")}
         for axis in ("x", "y"):
             if getattr(self, axis):

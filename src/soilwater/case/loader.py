@@ -117,7 +117,8 @@ def _raw(name_or_path):
 
 
 def _read_toml(source, stem, label=None):
-    """Parse the TOML file ``source`` (a path or resource); ``name`` defaults to ``stem``."""
+    """Parse the TOML file ``source`` (a path or resource); ``name`` defaults to ``stem``,
+    and a relative ``geometry.mesh`` is read from the file's folder."""
     try:
         with source.open("rb") as fh:
             data = tomllib.load(fh)
@@ -125,4 +126,7 @@ def _read_toml(source, stem, label=None):
         raise InputError(f"case file {label or source.name!r} is not valid TOML: "
                          f"{err}") from None
     data.setdefault("name", stem)
+    geometry = data.get("geometry")
+    if isinstance(geometry, dict) and isinstance(geometry.get("mesh"), str):
+        geometry["mesh"] = str(Path(str(source)).parent / Path(geometry["mesh"]).expanduser())
     return data

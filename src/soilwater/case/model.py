@@ -5,7 +5,8 @@ TOML file) or :func:`soilwater.case.validation.case_from_dict`; its TOML layout,
 and load-time bounds are documented in :mod:`soilwater.case.schema`. Units are those of the
 case (kPa, m, s in the built-in cases).
 
-The parts live where their concept does: the boundary conditions
+The parts live where their concept does: the domain (:class:`~soilwater.case.domain.Geometry`,
+a rectangle or a user's mesh) in :mod:`soilwater.case.domain`, the boundary conditions
 (:class:`~soilwater.case.boundary.Boundary`, :class:`~soilwater.case.boundary.Edge`,
 :class:`~soilwater.case.boundary.Segment`) in :mod:`soilwater.case.boundary`, the node
 layout (:class:`~soilwater.case.grid.Discretisation`) in :mod:`soilwater.case.grid`, the
@@ -23,12 +24,14 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from soilwater.case.boundary import SEGMENT_TOLERANCE, Boundary, along
+from soilwater.case.domain import Geometry
 from soilwater.case.grid import Discretisation, grid_line
 from soilwater.efg.settings import EFGSettings
 from soilwater.errors import require
 from soilwater.fem.settings import FEMSettings
 from soilwater.material.fluid import Fluid
 from soilwater.material.presets import material_from_spec
+from soilwater.material.regions import Regions
 from soilwater.references.closed_forms import exact_solution
 
 #: Analyses: the coupled u-p march, or static elasticity (EFG only).
@@ -39,15 +42,6 @@ ON_FAILURE = ("error", "stop")
 STRESS_STARTS = ("uniform", "geostatic")
 MAX_STEPS = 100_000
 """Largest number of time steps of a case (``time.steps``, or geometric steps to the end)."""
-
-
-@dataclass(frozen=True)
-class Geometry:
-    """Rectangle ``[0, width] x [0, height]`` [m]."""
-
-    width: float
-    height: float
-    shape: str = "rectangle"
 
 
 @dataclass(frozen=True)
@@ -73,17 +67,15 @@ class Initial:
     ``"uniform"`` (the material's p'0, e0, ocr everywhere) or ``"geostatic"``: the
     vertical effective stress of the buoyant weight under the ``surcharge`` [kPa] on top,
     horizontal ``k0`` times it (a number, or ``"nc"``: the material's normally
-    consolidated value), the void ratio on the compression line anchored at ``e_ref``
-    under ``sigma_v_ref`` [kPa] (the oedometer convention; default the material's e0 at
-    p'0), and a vertical overconsolidation ratio ``ocr``.
+    consolidated value), the void ratio on the material's compression line (anchored by
+    ``material.e_ref`` and ``sigma_v_ref``, or through its e0 at p'0), and a vertical
+    overconsolidation ratio ``ocr``.
     """
 
     pore_pressure: float | str = 0.0
     stress: str = "uniform"
     surcharge: float = 0.0
     k0: float | str = "nc"
-    e_ref: float | None = None
-    sigma_v_ref: float | None = None
     ocr: float = 1.0
 
     def to_dict(self):
@@ -116,7 +108,6 @@ class Loading:
             return np.where(np.asarray(t) > 0, self.load, 0.0)
         times, factors = np.array(self.load).T
         return np.interp(t, times, factors)
-
 
     def jump(self, t):
         """The jump of the load factor at time t [s], ``f(t+) - f(t)``: all of ``f(0+)``
@@ -206,7 +197,9 @@ class Case:
     (:func:`dataclasses.replace` does not). ``material_spec`` holds the skeleton's
     parameters, resolved (a preset and ``Cc``, ``Cr`` written out as
     :func:`soilwater.material.presets.parameters` gives them), as sorted ``(key, value)``
-    pairs; ``efg`` holds the
+    pairs; ``regions``, on a mesh with ``[material.NAME]`` tables, each physical
+    surface's ``(name, spec)``, its spec resolved the same way and with its
+    ``permeability`` (:mod:`soilwater.case.regions`); ``efg`` holds the
     meshless settings, weights parsed into :class:`soilwater.efg.settings.Weight` objects, and
     ``fem`` the FEM reference's (:class:`soilwater.fem.settings.FEMSettings`).
     """
@@ -223,6 +216,7 @@ class Case:
     loading: Loading
     time: TimeStepping
     probes: tuple[Probe, ...] = ()
+    regions: tuple[tuple[str, tuple], ...] = ()
     exact: tuple[tuple[str, object], ...] = ()
     efg: EFGSettings = field(default_factory=EFGSettings)
     diagnostics: Diagnostics = Diagnostics()
@@ -279,14 +273,23 @@ class Case:
         return exact_solution(params.pop("solution"), **params)
 
     def material(self):
-        """The soil skeleton (``CamClay`` or ``LinearElastic``) built from the spec."""
-        return material_from_spec(dict(self.material_spec))
+        """The soil skeleton (``CamClay`` or ``LinearElastic``) built from the spec; with
+        regions (``[material.NAME]`` on a mesh), their
+        :class:`~soilwater.material.regions.Regions`."""
+        if not self.regions:
+            return material_from_spec(dict(self.material_spec))
+        specs = [dict(spec) for _, spec in self.regions]
+        return Regions(tuple(name for name, _ in self.regions),
+                       tuple(material_from_spec(spec) for spec in specs),
+                       tuple(spec["permeability"] for spec in specs))
 
     @property
     def spacing(self):
         """Smallest grid spacing ``(hx, hy)`` [m]: ``width / (nx - 1)`` and
-        ``height / (ny - 1)`` on a regular grid."""
+        ``height / (ny - 1)`` on a regular grid; on a mesh, its shortest edge twice."""
         d, g = self.discretisation, self.geometry
+        if g.mesh is not None:
+            return (g.mesh.spacing,) * 2
         return tuple(float(np.diff(line).min()) if pieces else length / (n - 1)
                      for length, n, pieces, line in zip((g.width, g.height), (d.nx, d.ny),
                                                         (d.x, d.y), self.grid_lines()))
@@ -301,8 +304,11 @@ class Case:
         """Initial node coordinates, shape (N, 2) [m].
 
         Grid nodes row by row from the bottom (x fastest), then, for ``grid+centres``,
-        the cell centres in the same order: ``N = nx ny (+ (nx-1)(ny-1))``.
+        the cell centres in the same order: ``N = nx ny (+ (nx-1)(ny-1))``; a mesh's
+        vertices.
         """
+        if self.geometry.mesh is not None:
+            return self.geometry.mesh.points.copy()
         d = self.discretisation
         x, y = self.grid_lines()
         grid = np.stack(np.meshgrid(x, y), axis=-1).reshape(-1, 2)
@@ -322,8 +328,11 @@ class Case:
 
         From the lower-left corner: bottom edge left to right, right edge up, top edge right
         to left, left edge down; ``2 (nx + ny) - 4`` indices (cell centres are never on the
-        boundary). ``nodes[case.boundary_loop()]`` is the boundary polygon.
+        boundary); a mesh's boundary loop. ``nodes[case.boundary_loop()]`` is the boundary
+        polygon.
         """
+        if self.geometry.mesh is not None:
+            return self.geometry.mesh.loop.copy()
         nx, ny = self.discretisation.nx, self.discretisation.ny
         i, j = np.arange(nx), np.arange(ny)
         return np.concatenate([i, j[1:] * nx + nx - 1, (ny - 1) * nx + i[-2::-1],
@@ -350,7 +359,8 @@ class Case:
     def edge_conditions(self, side, points):
         """:meth:`~soilwater.case.boundary.Edge.at` of edge ``side`` at initial positions
         ``points`` (P, 2) [m] on it, segment ends widened by
-        :data:`~soilwater.case.boundary.SEGMENT_TOLERANCE` times the smallest spacing."""
+        :data:`~soilwater.case.boundary.SEGMENT_TOLERANCE` times the smallest spacing (a
+        mesh's boundary groups have no segments)."""
         return getattr(self.boundary, side).at(along(side, points),
                                                SEGMENT_TOLERANCE * min(self.spacing))
 
@@ -372,8 +382,10 @@ class Case:
         return out
 
     def edge_length(self, side):
-        """Initial length of edge ``side`` [m]."""
+        """Initial length of edge (or mesh boundary group) ``side`` [m]."""
         g = self.geometry
+        if g.mesh is not None:
+            return g.mesh.group_length(side)
         return g.width if side in ("top", "bottom") else g.height
 
     def times(self):
@@ -401,9 +413,10 @@ class Case:
         time = {k: v for k, v in asdict(self.time).items() if v is not None}
         return _plain({
             "name": self.name, "description": self.description, "analysis": self.analysis,
-            "geometry": asdict(self.geometry),
+            "geometry": self.geometry.to_dict(),
             "discretisation": self.discretisation.to_dict(),
-            "material": {**dict(self.material_spec), **self._fluid_dict()},
+            "material": {**dict(self.material_spec), **self._fluid_dict(),
+                         **{name: dict(spec) for name, spec in self.regions}},
             "initial": self.initial.to_dict(),
             "gravity": asdict(self.gravity),
             "boundary": {name: edge.to_dict() for name, edge in self.boundary.items()},

@@ -22,9 +22,19 @@ Schema (every case has the same one; unknown keys are an error)::
                                       # one load step, no pore pressure)
 
     [geometry]
-    shape = "rectangle"               # the only shape
+    shape = "rectangle"               # or "mesh" (the default with mesh)
     width = 3.0                       # m, along x, in [1e-6, 1e6]
     height = 4.0                      # m, along y, in [1e-6, 1e6]
+    # mesh = "slope.msh"              # instead of width and height: a gmsh mesh (.msh,
+                                      # read by meshio) or geometry (.geo, meshed by the
+                                      # optional gmsh package), relative to the case
+                                      # file; 3-node triangles, one boundary loop, the
+                                      # bounding box's lower-left corner at the origin;
+                                      # its physical curves are the boundary groups of
+                                      # [boundary.NAME] (every boundary facet in one),
+                                      # its physical surfaces the material regions; no
+                                      # [discretisation] (the mesh's vertices are the
+                                      # nodes); soilwater.geometry.mesh
 
     [discretisation]
     nx = 7                            # grid nodes along x (>= 2): spacing width/(nx-1)
@@ -49,7 +59,12 @@ Schema (every case has the same one; unknown keys are an error)::
     # lambda = 0.11                   # Cam-clay: lambda, kappa (slopes of v against
     # kappa = 0.04                    # ln p'; or Cc, Cr, per decade: Cc = lambda ln 10),
     # M = 1.42                        # M, nu, e0, p0 [kPa] (the initial state:
-    # nu = 0.333                      # e0 at p'0), ocr (default 1), G (default from nu);
+    # nu = 0.333                      # e0 at p'0), ocr (default 1), G (default from nu),
+                                      # e_ref and sigma_v_ref [kPa] (the oedometer's
+                                      # anchor of the compression line: e_ref on the
+                                      # normally consolidated 1-D line at sigma'_v =
+                                      # sigma_v_ref; with them e0 and p0 are optional,
+                                      # p0 = sigma_v_ref and e0 on the line);
     # e0 = 0.83                       # elastic: E [kPa] (or mv [1/kPa], the
     # p0 = 3.0                        # oedometric compressibility 1/(constrained
                                       # modulus): a constant-m_v skeleton), nu, p0
@@ -84,12 +99,12 @@ Schema (every case has the same one; unknown keys are an error)::
                                       # t = 0 (> 0 for Cam-clay: p' > 0 at the top)
     k0 = "nc"                         # geostatic: in (0, 1], or "nc" (the material's
                                       # normally consolidated value)
-    e_ref = 2.4                       # geostatic: void ratio > 0 on the normal compression
-    sigma_v_ref = 10.0                # line at this vertical effective stress [kPa] > 0
-                                      # (both or neither; default: e0 at p'0)
     ocr = 1.0                         # geostatic: vertical overconsolidation ratio >= 1
 
-    [boundary.left]                   # each of left, right, bottom, top exactly once
+    [boundary.left]                   # each of left, right, bottom, top exactly once;
+                                      # on a mesh, any of its boundary groups (the others
+                                      # free, impermeable, unloaded), no segments, no
+                                      # rigid, roller on vertical or horizontal groups
     ux = "fixed"                      # "free" (default), "fixed", "prescribed", "rigid"
     uy = "free"
     # displacement = "roller"         # shorthand instead of ux/uy: "roller" (normal
@@ -266,10 +281,10 @@ SECTIONS = ("geometry", "discretisation", "material", "initial", "gravity", "bou
 """The sections of a case, besides the top-level keys ``name``, ``description`` and
 ``analysis``."""
 KEYS = {
-    "geometry": ("shape", "width", "height"),
+    "geometry": ("shape", "width", "height", "mesh"),
     "discretisation": ("nx", "ny", "x", "y", "layout", "jitter", "seed"),
     "diagnostics": ("uniqueness",),
-    "initial": ("pore_pressure", "stress", "surcharge", "k0", "e_ref", "sigma_v_ref", "ocr"),
+    "initial": ("pore_pressure", "stress", "surcharge", "k0", "ocr"),
     "gravity": ("g",),
     "edge": ("ux", "uy", "displacement", "traction", "water"),
     "segment": ("from", "to", "ux", "uy", "water", "settlement_rate", "force"),
@@ -361,11 +376,12 @@ def _replaced_keys(path):
     return ()
 
 
-def expand_displacement(value, side):
+def expand_displacement(value, side, normal=None):
     """The ``displacement`` shorthand of edge ``side`` as ``{"ux": ..., "uy": ...}``.
 
     ``roller`` fixes the edge's normal component (``ux`` on the left and right edges,
-    ``uy`` on the bottom and top) and frees the other; ``fixed`` and ``free`` set both.
+    ``uy`` on the bottom and top; ``normal``, ``"ux"`` or ``"uy"``, on a mesh's boundary
+    group) and frees the other; ``fixed`` and ``free`` set both.
 
     Examples
     --------
@@ -375,5 +391,9 @@ def expand_displacement(value, side):
     require(value in ("roller", "fixed", "free"), f"boundary.{side}.displacement = "
             f"{value!r} is unknown: use roller, fixed or free (or set ux and uy)")
     if value == "roller":
-        return {"ux": "free", "uy": "free", _NORMAL[side]: "fixed"}
+        normal = normal or _NORMAL.get(side)
+        require(normal is not None, f"boundary.{side}.displacement = \"roller\" needs a "
+                "vertical or horizontal boundary group (a roller fixes the component "
+                "normal to it): set ux and uy instead")
+        return {"ux": "free", "uy": "free", normal: "fixed"}
     return {"ux": value, "uy": value}

@@ -15,11 +15,13 @@ import numpy as np
 from soilwater.case.boundary_validation import (read_boundary, require_coupled_footings,
                                                 require_segments_on_nodes)
 from soilwater.case.entries import check_keys, integer, number, pair, section, string
-from soilwater.case.grid import LAYOUTS, Discretisation
-from soilwater.case.model import (ANALYSES, STRESS_STARTS, Case, Diagnostics, Geometry,
-                                  Gravity, Initial, Probe)
-from soilwater.case.schema import (ASPECTS, GRADINGS, KEYS, LENGTHS,
-                                   MAX_TRIANGLE_ORDER, SCALES, SECTIONS)
+from soilwater.case.domain import read_geometry
+from soilwater.case.regions import read_regions
+from soilwater.case.grid import LAYOUTS, MESH, Discretisation
+from soilwater.case.model import (ANALYSES, STRESS_STARTS, Case, Diagnostics, Gravity,
+                                  Initial, Probe)
+from soilwater.case.schema import (ASPECTS, GRADINGS, KEYS, MAX_TRIANGLE_ORDER, SCALES,
+                                   SECTIONS)
 from soilwater.case.time_validation import read_loading, read_time
 from soilwater.efg.settings import (CELLS, CORRECTIONS, DEFAULT_SCALE, ESSENTIAL,
                                     INTEGRATIONS, STABILISATIONS, EFGSettings, Weight)
@@ -51,8 +53,9 @@ def case_from_dict(data):
     """
     require(isinstance(data, dict), "a case must be a table of sections")
     check_keys(data, ("name", "description", "analysis") + SECTIONS, "case", "section")
-    geometry = _geometry(section(data, "geometry"))
+    geometry = read_geometry(section(data, "geometry"))
     material_spec, fluid = _material(section(data, "material"))
+    regions = read_regions(section(data, "material"), fluid, geometry)
     probes = _probes(section(data, "probes", {}), geometry)
     loading = read_loading(section(data, "loading", {}))
     case = Case(
@@ -60,8 +63,8 @@ def case_from_dict(data):
         description=string(data, "description", "case", ""),
         analysis=string(data, "analysis", "case", "coupled", ANALYSES),
         geometry=geometry,
-        discretisation=_discretisation(section(data, "discretisation"), geometry),
-        material_spec=material_spec, fluid=fluid,
+        discretisation=_discretisation(section(data, "discretisation", {}), geometry),
+        material_spec=material_spec, fluid=fluid, regions=regions,
         initial=_initial(section(data, "initial", {})),
         boundary=read_boundary(section(data, "boundary"), loading, geometry),
         loading=loading,
@@ -78,6 +81,8 @@ def case_from_dict(data):
     require_coupled_footings(case)
     require_segments_on_nodes(case)
     _require_weight(case)
+    require(not case.regions or case.analysis == "coupled", "material regions need analysis "
+            "= \"coupled\" (the static solver takes one elastic material)")
     require("specific_gravity" not in section(data, "material") or case.gravity.g > 0,
             "material.specific_gravity has no effect without gravity: add [gravity] with "
             "g = 9.81 for a layer under its own weight, or remove the key")
@@ -85,17 +90,13 @@ def case_from_dict(data):
     return case
 
 
-def _geometry(table):
-    check_keys(table, KEYS["geometry"], "geometry")
-    string(table, "shape", "geometry", "rectangle", ("rectangle",))
-    width, height = number(table, "width", "geometry"), number(table, "height", "geometry")
-    for key, value in (("width", width), ("height", height)):
-        require(LENGTHS[0] <= value <= LENGTHS[1], f"geometry.{key} = {value:g} must lie "
-                f"in [{LENGTHS[0]:g}, {LENGTHS[1]:g}] m: give the size of the rectangle in m")
-    return Geometry(width=width, height=height)
-
-
 def _discretisation(table, geometry):
+    if geometry.mesh is not None:
+        require(not table, f"discretisation.{next(iter(table), '')}: a case on a mesh takes "
+                "its nodes from geometry.mesh: remove [discretisation] (refine the mesh "
+                "instead)")
+        return Discretisation(nx=0, ny=0, layout=MESH)
+    require(table, "discretisation is missing: add [discretisation] with nx and ny")
     check_keys(table, KEYS["discretisation"], "discretisation")
     counts, pieces = {}, {}
     for axis, length in (("x", geometry.width), ("y", geometry.height)):
@@ -148,6 +149,10 @@ def _require_aspect(case):
     """Refuse sliver cells: the spacing aspect hx/hy of every grid cell must lie in
     :data:`ASPECTS`; square background cells need a regular grid."""
     d = case.discretisation
+    if d.layout == MESH:
+        require(case.efg.cells != "squares", "efg.cells = 'squares' needs a regular grid, "
+                "not geometry.mesh: use efg.cells = 'delaunay'")
+        return
     hx, hy = case.spacing
     hx_max, hy_max = (np.diff(line).max() if pieces else h for h, pieces, line
                       in zip(case.spacing, (d.x, d.y), case.grid_lines()))
@@ -173,7 +178,7 @@ def _material(table):
     """Split ``[material]`` into the skeleton spec (validated by building it) and Fluid."""
     spec = {}
     for key in table:
-        if key in FLUID_KEYS:
+        if key in FLUID_KEYS or isinstance(table[key], dict):
             continue
         spec[key] = (string(table, key, "material", None) if key in ("model", "preset")
                      else number(table, key, "material"))
@@ -214,6 +219,9 @@ def _gravity(table):
 
 
 def _initial(table):
+    moved = [key for key in ("e_ref", "sigma_v_ref") if key in table]
+    require(not moved, f"initial.{', '.join(moved)}: the compression line's anchor is the "
+            "material's: set material.e_ref and material.sigma_v_ref")
     check_keys(table, KEYS["initial"], "initial")
     value = table.get("pore_pressure", 0.0)
     if value != "balance":
@@ -221,7 +229,7 @@ def _initial(table):
                 "number or \"balance\"")
         value = number(table, "pore_pressure", "initial", 0.0)
     start = string(table, "stress", "initial", "uniform", STRESS_STARTS)
-    geostatic = ("surcharge", "k0", "e_ref", "sigma_v_ref", "ocr")
+    geostatic = ("surcharge", "k0", "ocr")
     if start == "uniform":
         given = [key for key in geostatic if key in table]
         require(not given, f"initial.{', '.join(given)} only apply to initial.stress = "
@@ -236,21 +244,12 @@ def _initial(table):
         k0 = number(table, "k0", "initial")
         require(0 < k0 <= 1, f"initial.k0 = {k0} must lie in (0, 1] (or \"nc\": the "
                 "material's normally consolidated value)")
-    require(("e_ref" in table) == ("sigma_v_ref" in table), "initial.e_ref and "
-            "initial.sigma_v_ref anchor the compression line together: set both or neither")
-    e_ref = sigma_ref = None
-    if "e_ref" in table:
-        e_ref = number(table, "e_ref", "initial")
-        sigma_ref = number(table, "sigma_v_ref", "initial")
-        require(e_ref > 0, f"initial.e_ref = {e_ref} must be positive (a void ratio)")
-        require(sigma_ref > 0, f"initial.sigma_v_ref = {sigma_ref} must be positive (kPa, "
-                "compression positive)")
     surcharge = number(table, "surcharge", "initial", 0.0)
     require(surcharge >= 0, f"initial.surcharge = {surcharge} must be >= 0 (kPa, "
             "compression positive)")
     ocr = number(table, "ocr", "initial", 1.0)
     require(ocr >= 1, f"initial.ocr = {ocr} must be at least 1")
-    return Initial(value, start, surcharge, k0, e_ref, sigma_ref, ocr)
+    return Initial(value, start, surcharge, k0, ocr)
 
 
 def _require_weight(case):
@@ -263,14 +262,22 @@ def _require_weight(case):
     if case.initial.stress == "geostatic":
         require(case.analysis == "coupled", "initial.stress = \"geostatic\" needs analysis "
                 "= \"coupled\"")
+        mesh = case.geometry.mesh
+        if mesh is not None:
+            up = mesh.loop[mesh.surface()]
+            low = mesh.points[up[np.argmin(mesh.points[up, 1])]]
+            require(low[1] >= case.geometry.height * (1 - 1e-9), "initial.stress = "
+                    "\"geostatic\" takes the depth below a level ground surface, and the "
+                    f"mesh's surface falls to y = {low[1]:g} m at x = {low[0]:g} m (its top "
+                    f"is at {case.geometry.height:g} m): start uniform, or load a level "
+                    "ground (an embankment as a surface load)")
         plastic = case.material().plastic
         require(case.initial.surcharge > 0 or not plastic,
                 "initial.surcharge must be > 0 with a Cam-clay geostatic start: p' would be "
                 "0 at the top surface (use e.g. 1 kPa)")
-        given = [k for k in ("e_ref", "ocr") if getattr(case.initial, k) not in (None, 1.0)]
-        require(plastic or not given, f"initial.{', '.join(given)} describe a compression "
-                "line, which a linear elastic skeleton does not have: remove them (its "
-                "void ratio is material.e0)")
+        require(plastic or case.initial.ocr == 1, "initial.ocr describes a compression "
+                "line, which a linear elastic skeleton does not have: remove it (its void "
+                "ratio is material.e0)")
 
 
 def _exact(table):
@@ -361,6 +368,13 @@ def _fem(table):
                        remesh_quality=quality)
 
 
+def _extent(geometry):
+    """The domain in words, for an error message."""
+    if geometry.mesh is not None:
+        return f"the mesh {geometry.mesh.path}"
+    return f"[0, {geometry.width:g}] x [0, {geometry.height:g}]"
+
+
 def _probes(table, geometry):
     probes = []
     for name, point in table.items():
@@ -368,8 +382,7 @@ def _probes(table, geometry):
                 "digits, _ and - in probe names (they become column names)")
         x, y = pair(point, f"probes.{name}")
         tol = 1e-9 * max(geometry.width, geometry.height)
-        require(-tol <= x <= geometry.width + tol and -tol <= y <= geometry.height + tol,
-                f"probes.{name} = [{x}, {y}] lies outside the domain [0, {geometry.width}]"
-                f" x [0, {geometry.height}]: move it inside")
+        require(geometry.inside([(x, y)], tol)[0], f"probes.{name} = [{x}, {y}] lies "
+                f"outside the domain ({_extent(geometry)}): move it inside")
         probes.append(Probe(name, (x, y)))
     return tuple(probes)

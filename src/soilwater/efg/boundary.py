@@ -2,7 +2,8 @@
 
 The boundary is the closed loop of boundary nodes (counter-clockwise) in the current
 configuration; each segment between two consecutive loop nodes belongs to one edge of the
-case (left, right, bottom, top), fixed from the initial configuration. Gauss points on the
+case (left, right, bottom, top, or a mesh's boundary group), fixed from the initial
+configuration. Gauss points on the
 segments carry line weights [m per unit thickness] and outward normals.
 
 Essential conditions are imposed by penalty (Zhu and Atluri 1998): for a constrained
@@ -31,7 +32,7 @@ class BoundaryPoints:
     weights : ndarray, shape (G,)
         Line weights [m per unit thickness].
     edge : ndarray, shape (G,)
-        Index into ``soilwater.case.boundary.EDGES`` of each point's edge.
+        Index into ``case.boundary.items()`` of each point's edge.
     normal : ndarray, shape (G, 2)
         Unit outward normals.
     """
@@ -43,15 +44,9 @@ class BoundaryPoints:
 
 
 def segment_edges(initial_nodes, loop, geometry):
-    """Edge index of each loop segment ``(loop[k], loop[k + 1])``, from initial positions.
-
-    The midpoint of a segment of the rectangle lies on exactly one of its edges.
-    """
-    a, b = initial_nodes[loop], initial_nodes[np.roll(loop, -1)]
-    mid = (a + b) / 2
-    dist = np.stack([np.abs(mid[:, 0]), np.abs(mid[:, 0] - geometry.width),
-                     np.abs(mid[:, 1]), np.abs(mid[:, 1] - geometry.height)], axis=1)
-    return np.argmin(dist, axis=1)
+    """Edge index of each loop segment ``(loop[k], loop[k + 1])``, from initial positions
+    (:meth:`soilwater.case.domain.Geometry.edge_of`)."""
+    return geometry.edge_of(initial_nodes[loop], initial_nodes[np.roll(loop, -1)])
 
 
 #: Gauss points per boundary segment (penalties, tractions, the solver's gaps).
@@ -69,7 +64,7 @@ def boundary_points(nodes, loop, edges, order=BOUNDARY_ORDER):
         Boundary nodes, counter-clockwise.
     edges : ndarray of int
         Edge index of each segment (:func:`segment_edges`): its position in
-        ``soilwater.case.boundary.EDGES`` (left, right, bottom, top).
+        ``case.boundary.items()``.
     order : int
         Gauss points per segment.
     """
@@ -94,8 +89,8 @@ class Conditions:
         edge or a load-controlled footing) or ``footing`` (uy of a velocity-controlled
         footing) per component.
     traction : ndarray, shape (G, 2)
-        The edge's traction [stress unit] (zero where ``exact``, see ``exact_traction``,
-        and on named segments, which carry none).
+        The edge's traction at each point [stress unit] (zero where ``exact``, see
+        ``exact_traction``, and on named segments, which carry none).
     exact_traction : ndarray of bool, shape (G,)
         Whether the edge takes its traction from the case's exact solution.
     drained : ndarray of bool, shape (G,)
@@ -161,7 +156,7 @@ def conditions(case, bpoints, initial=None):
         segment[on] = np.where(seg >= 0, seg + first, -1)
         exact[on] = edge.traction == "exact"
         if edge.traction != "exact":
-            traction[on] = np.where(seg[:, None] >= 0, 0.0, edge.traction)
+            traction[on] = np.where(seg[:, None] >= 0, 0.0, edge.traction_at(initial[on]))
         first += len(edge.segments)
     rates = np.array([seg.settlement_rate if seg.footing and not seg.load_controlled
                       else 0.0 for _, seg in case.boundary.segments()] + [0.0])

@@ -58,7 +58,9 @@ class Model:
         edges = segment_edges(case.nodes(), loop, case.geometry)
         initial_bp = boundary_points(case.nodes(), loop, edges).points
         triangles = None
-        if case.efg.integration != "paper":
+        if case.geometry.mesh is not None and case.efg.integration != "paper":
+            triangles = case.geometry.mesh.triangles
+        elif case.efg.integration != "paper":
             nodes = case.nodes()
             triangles, _ = delaunay_triangles(nodes, nodes[loop])
         return cls(case, material, loop, edges, Scales.of(case, material), initial_bp,

@@ -63,7 +63,6 @@ from functools import partial
 import numpy as np
 import scipy.sparse as sp
 
-from soilwater.case.boundary import EDGES
 from soilwater.diagnostics.bifurcation import h1_gram, restricted_eigenvalue
 from soilwater.efg.assembly import Pattern, scatter
 from soilwater.efg.boundary import BOUNDARY_ORDER
@@ -207,15 +206,17 @@ def _history_row(model, points, t, dt, info):
     records are the summary's ``rebuild_records``); after a rebuild the cells measured
     are the new ones."""
     case = model.case
-    top = model.loop[model.edges == EDGES.index("top")]
+    nodes0 = case.nodes()
+    level = nodes0[:, 1] >= case.geometry.height * (1 - 1e-9)   # the top: boundary facets
+    top = model.loop[level[model.loop] & level[np.roll(model.loop, -1)]]   # at its height
     probes = ()
     if len(points.probes):
         s = case.efg
         shape = ShapeFunctions.build(points.nodes, points.probes, s.weight_p, s.scale_p,
                                      key="efg.scale_p")
-        probes = zip([pr.name for pr in case.probes], shape.phi @ points.p)
+        probes = zip([pr.name for pr in case.probes], shape.phi @ points.p,
+                     points.probes - [pr.point for pr in case.probes])
     uniqueness = points.uniqueness if case.diagnostics.uniqueness else None
-    nodes0 = case.nodes()
     segments = [(seg, points.nodes[k], nodes0[k], force,
                  points.plate if seg.load_controlled else None)
                 for (_, seg), k, force in zip(case.boundary.segments(), case.segment_nodes(),
@@ -244,6 +245,6 @@ def _snapshot(model, points, t):
             "p_eff": p, "q": q, "stress": stress, "stretching": stretching,
             "support_radius": at.support}
     data.update(state)
-    data.update(permeability(model.case, state["v"]))
+    data.update(permeability(model.case, state))
     cells = [("triangle", points.cells.triangles)] if model.consistent else []
     return Snapshot(t, points.nodes.copy(), data, cells)

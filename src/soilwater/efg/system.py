@@ -22,6 +22,7 @@ from soilwater.efg.essential.plate import bordered
 from soilwater.efg.model import Points
 from soilwater.linalg.layout import Layout, Policy
 from soilwater.material.kinematics import cauchy_traction
+from soilwater.material.regions import fluid_at
 from soilwater.nonlinear.history import timed
 from soilwater.nonlinear.newton import material_update
 from soilwater.physics import weakform
@@ -67,7 +68,7 @@ class System:
         if case.efg.essential == "nitsche":
             with timed(timings, "assembly_s"):        # beta's eigenvalue bounds
                 self.nitsche = NitscheStep(model, points, disc, self.dt,
-                                        (self.stress_n, self.state_n["v"]))
+                                           (self.stress_n, self.state_n))
         self.weight = buoyant_weight(case, self.state_n["v"])
         initial = cauchy_traction(model.sigma0_bp, disc.bp.normal)     # (G, 2)
         if self.nitsche is not None:     # held components: their flux carries it
@@ -86,7 +87,7 @@ class System:
         """``[R_u, R_p, plate?, pin?]`` at the iterate and its scaled size beyond
         round-off."""
         model, points, disc, n = self.model, self.points, self.disc, self.n
-        bc, fluid = disc.bc, model.case.fluid
+        bc, fluid = disc.bc, fluid_at(model.case.fluid, model.material, self.state_n)
         (self.stress, self.state, self.material_tangent, self.J, self.Finv,
          self.deps) = material_update(model.material, self.stress_n, self.state_n,
                                       gradient(disc.su, self.du, n), self.timings,
@@ -198,7 +199,7 @@ class System:
         boundary = self._essential_tangent() if boundary is None else boundary
         return _tangent(self.model, self.disc, self.stress, self.total,
                         self.material_tangent, self.J, self.Finv, self.dt,
-                        self.state_n["v"], self.grad_p, boundary)
+                        self.state_n, self.grad_p, boundary)
 
     def tangent(self):
         """:meth:`domain_tangent` bordered by the plate and the pin, if any."""
@@ -251,13 +252,14 @@ class System:
                       reactions=reactions)
 
 
-def _tangent(model, disc, stress, total, tangent, J, Finv, dt, v_n, grad_p, boundary):
+def _tangent(model, disc, stress, total, tangent, J, Finv, dt, state_n, grad_p, boundary):
     """The Newton tangent of ``(ux, uy, p_w)`` (fields blocked) at the current iterate:
     :func:`soilwater.physics.weakform.tangent` in the domain, the coefficients ``boundary``
     (:class:`soilwater.physics.weakform.Coefficients` of 3 x 3 fields) of the essential
     conditions at the boundary points."""
-    coeff = weakform.tangent(tangent, stress, total, J, Finv, disc.w, model.case.fluid, dt,
-                             model.beta, v_n, grad_p)
+    coeff = weakform.tangent(tangent, stress, total, J, Finv, disc.w,
+                             fluid_at(model.case.fluid, model.material, state_n), dt,
+                             model.beta, state_n["v"], grad_p)
     K = disc.tangent(coeff, boundary)
     if not model.tau:
         return K

@@ -163,9 +163,10 @@ def _history_row(model, current, t, dt, info):
     case, topology = model.case, current.topology
     top = model.space.mesh0.p[1] > case.geometry.height * (1 - 1e-9)
     probes = ()
-    if topology.probes is not None:
-        probes = zip([pr.name for pr in case.probes], topology.probes @ current.p)
     nodes0 = model.space.mesh0.p.T
+    if topology.probes is not None:     # vertex displacements, linear between vertices
+        moved = topology.probes @ (current.vertices - nodes0)
+        probes = zip([pr.name for pr in case.probes], topology.probes @ current.p, moved)
     segments = [(seg, current.vertices[k], nodes0[k], force,
                  float(current.vertices[k[0], 1] - nodes0[k[0], 1])  # the plate's uy
                  if seg.load_controlled else None)
@@ -205,7 +206,7 @@ def _snapshot(model, current, t):
         total = np.column_stack([np.bincount(cells.T.ravel(), np.repeat(m, cells.shape[0]),
                                              minlength=N) for m in mean.T])
         data[name] = (total / node_volume[:, None]).reshape((N, *values.shape[1:]))
-    data.update(permeability(model.case, data["v"]))
+    data.update(permeability(model.case, data))
     quadratic = None
     if space.n_u > N:                   # the quadratic pairs' own nodes, for the files
         quadratic = {"facets": mesh0.facets.T.copy(), "t2f": mesh0.t2f.T.copy(),

@@ -4,8 +4,9 @@ The mesh vertices are the case's nodes (:meth:`soilwater.case.model.Case.nodes`,
 a FEM run and an EFG run of a case share their node set; second-order elements add
 scikit-fem's midside (and, for Q2, centre) DOFs. Triangles: two per grid cell for the
 ``grid`` layout (diagonal from lower left to upper right), Delaunay triangles
-(scipy.spatial) for ``grid+centres`` (four per cell around its centre). Quadrilaterals:
-the cells of the structured grid (``grid`` layout only).
+(scipy.spatial) for ``grid+centres`` (four per cell around its centre), a mesh's own
+triangles (``geometry.mesh``). Quadrilaterals: the cells of the structured grid (``grid``
+layout only).
 
 Every element pair uses one Gauss rule for all terms, so the material points (quadrature
 points) of the displacement and the pressure bases coincide; they keep their place in the
@@ -22,7 +23,6 @@ from skfem import (CellBasis, ElementQuad1, ElementQuad2, ElementTriP1, ElementT
                    FacetBasis, MeshQuad, MeshTri)
 
 from soilwater.errors import InputError
-from soilwater.case.boundary import EDGES
 
 
 @dataclass(frozen=True)
@@ -69,11 +69,18 @@ def initial_mesh(case, method):
     Raises
     ------
     InputError
-        A quadrilateral method on a ``grid+centres`` case.
+        A quadrilateral method on a ``grid+centres`` case or a mesh.
     """
     pair = PAIRS[method]
     nodes = case.nodes()
     d = case.discretisation
+    if case.geometry.mesh is not None:
+        if pair.shape == "quad":
+            raise InputError(f"--method {method} needs a structured grid (quadrilaterals), "
+                             f"case {case.name!r} is a triangle mesh (geometry.mesh): use "
+                             "fem-th, fem-p1p1 or fem-p1p1-stab")
+        return MeshTri(np.ascontiguousarray(nodes.T),
+                       np.ascontiguousarray(case.geometry.mesh.triangles.T))
     k = (np.arange(d.ny - 1)[:, None] * d.nx + np.arange(d.nx - 1)[None, :]).ravel()
     if pair.shape == "quad":
         if d.layout != "grid":
@@ -101,7 +108,8 @@ class Space:
         their topology and the initial positions of boundary facets are used).
     pair : Pair
     edge_facets : dict
-        Boundary facet indices of each edge name (left, right, bottom, top).
+        Boundary facet indices of each edge name (left, right, bottom, top, or a mesh's
+        boundary groups).
     u_dofs, p_dofs : dict
         Scalar DOF indices of the displacement / pressure basis on each edge (vertex and
         midside DOFs), from the initial coordinates.
@@ -227,10 +235,9 @@ def _counter_clockwise(mesh):
 
 
 def _edge_facets(mesh, geometry):
-    """Boundary facets of each edge of the rectangle, from their midpoints."""
+    """Boundary facets of each edge of the domain
+    (:meth:`soilwater.case.domain.Geometry.edge_of`, initial positions)."""
     facets = mesh.boundary_facets()
-    mid = mesh.p[:, mesh.facets[:, facets]].mean(axis=1)
-    dist = np.stack([np.abs(mid[0]), np.abs(mid[0] - geometry.width),
-                     np.abs(mid[1]), np.abs(mid[1] - geometry.height)])
-    edge = np.argmin(dist, axis=0)
-    return {name: facets[edge == k] for k, name in enumerate(EDGES)}
+    a, b = (mesh.p[:, mesh.facets[k, facets]].T for k in range(2))
+    edge = geometry.edge_of(a, b)
+    return {name: facets[edge == k] for k, name in enumerate(geometry.edges)}

@@ -19,6 +19,7 @@ from soilwater.fem.assembly import Shapes, block
 from soilwater.fem.spaces import cell_bases
 from soilwater.linalg.layout import Layout, Policy
 from soilwater.material.kinematics import cauchy_traction, prescribed_increment
+from soilwater.material.regions import fluid_at
 from soilwater.nonlinear.history import timed
 from soilwater.nonlinear.newton import material_update
 from soilwater.physics import weakform
@@ -53,13 +54,15 @@ def discretise(model, topology, vertices, t1, timings, load=None):
             fb = space.facet_basis(mesh, name)
             x0 = np.asarray(space.facet_basis(space.mesh0, name).global_coordinates())
             sigma0 = total_stress(model.case, model.material, x0.reshape(2, -1).T)
-            load = cauchy_traction(sigma0.reshape(x0.shape[1:] + (4,)),
-                                   np.moveaxis(fb.normals, 0, -1))
+            traction = cauchy_traction(sigma0.reshape(x0.shape[1:] + (4,)),
+                                       np.moveaxis(fb.normals, 0, -1))
             loaded = np.array([edge.ux, edge.uy]) == "free"
             bare = ~topology.constraints.unloaded[name][:, None, None]
-            load = load + bare * loaded * np.asarray(edge.traction, float) * factor
+            given = edge.traction_at(x0.reshape(2, -1).T).reshape(x0.shape[1:] + (2,))
+            traction = traction + bare * loaded * given * factor
             external += Shapes.of(fb).vector(np.concatenate(
-                [(fb.dx[..., None] * load)[..., None], np.zeros(load.shape + (2,))], -1))
+                [(fb.dx[..., None] * traction)[..., None],
+                 np.zeros(traction.shape + (2,))], -1))
     return Discretisation(Shapes.of(ub), Shapes.of(pb), ub.dx, ub.doflocs, external)
 
 
@@ -178,7 +181,7 @@ def policy(pair):
 def domain_residual(model, disc, current, x, stress, J, Finv, dt):
     """Full residual ``[R_u, R_p]`` and the total stress at the quadrature points
     (:func:`soilwater.physics.weakform.residual`, scattered with the element bases)."""
-    fluid, n_u = model.case.fluid, disc.u.n
+    fluid, n_u = fluid_at(model.case.fluid, model.material, current.state), disc.u.n
     E, Q = disc.dx.shape
     p_vals = disc.p.values(x[2 * n_u:]).reshape(E * Q, 3)
     pn_vals = disc.p.values(current.p).reshape(E * Q, 3)
@@ -197,8 +200,9 @@ def _tangent(model, disc, current, x, stress, total, tangent, J, Finv, dt):
     unknowns x (:func:`soilwater.physics.weakform.tangent`, assembled block by block)."""
     E, Q = disc.dx.shape
     grad_p = disc.p.values(x[2 * disc.u.n:]).reshape(E * Q, 3)[:, 1:]
-    c = weakform.tangent(tangent, stress, total, J, Finv, disc.dx.ravel(), model.case.fluid,
-                         dt, model.beta, current.state["v"], grad_p)
+    c = weakform.tangent(tangent, stress, total, J, Finv, disc.dx.ravel(),
+                         fluid_at(model.case.fluid, model.material, current.state), dt,
+                         model.beta, current.state["v"], grad_p)
     fields = ((disc.u, range(0, 2)), (disc.p, range(2, 3)))         # (basis, fields)
     return sp.bmat([[block(test, trial, c.block(f, g)) for trial, g in fields]
                     for test, f in fields], format="csr")

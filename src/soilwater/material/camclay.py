@@ -50,6 +50,11 @@ class CamClay(Material):
         Yield surface and hardening law.
     G : float or None
         Constant shear modulus; if given it replaces the Poisson-ratio rule.
+    e_ref, sigma_v_ref : float or None
+        The oedometer's anchor of the normal compression line: the void ratio of the
+        normally consolidated one-dimensional state at the vertical effective stress
+        ``sigma_v_ref`` [kPa] (both or neither; default: the line through the initial
+        state, :attr:`anchor`).
 
     Examples
     --------
@@ -71,6 +76,8 @@ class CamClay(Material):
     ocr: float = 1.0
     model: str = "original"
     G: float | None = None
+    e_ref: float | None = None
+    sigma_v_ref: float | None = None
 
     def __post_init__(self):
         require(self.model in MODELS,
@@ -88,12 +95,39 @@ class CamClay(Material):
         require(self.M > 0, f"material.M = {self.M} must be positive (critical state ratio)")
         require(self.ocr >= 1.0, f"material.ocr = {self.ocr} must be at least 1")
         require(self.G is None or self.G > 0, f"material.G = {self.G} must be positive")
+        require((self.e_ref is None) == (self.sigma_v_ref is None), "material.e_ref and "
+                "material.sigma_v_ref anchor the compression line together: set both or "
+                "neither")
+        require(self.e_ref is None or (self.e_ref > 0 and self.sigma_v_ref > 0),
+                f"material.e_ref = {self.e_ref} and sigma_v_ref = {self.sigma_v_ref} must "
+                "be positive (a void ratio, and kPa compression positive)")
 
     # -- derived constants -------------------------------------------------------------
     @property
     def v0(self):
         """Initial specific volume ``1 + e0``."""
         return 1.0 + self.e0
+
+    @property
+    def anchor(self):
+        """A state ``(p', p'c, v)`` on the normal compression line: the normally
+        consolidated one-dimensional state at ``sigma_v_ref`` with ``e_ref`` (K0 of
+        :meth:`k0_nc`), or the initial state ``(p'0, ocr p'0, v0)``; the line of
+        :meth:`volume` and of a geostatic start (:mod:`soilwater.physics.geostatic`).
+
+        Examples
+        --------
+        >>> clay = CamClay(lam=0.4, kappa=0.04, M=1.2, nu=0.3, e0=2.4, p0=10.0,
+        ...                model="modified", e_ref=2.4, sigma_v_ref=10.0)
+        >>> p, pc, v = clay.anchor
+        >>> round(float(p), 3), round(float(pc), 3), v
+        (7.733, 8.771, 3.4)
+        """
+        if self.e_ref is None:
+            return self.p0, self.ocr * self.p0, self.v0
+        nc = self.k0_nc()
+        p = (1 + 2 * nc) / 3 * self.sigma_v_ref
+        return p, float(self.size(p, (1 - nc) * self.sigma_v_ref)), 1.0 + self.e_ref
 
     @property
     def Lambda(self):

@@ -11,6 +11,7 @@ missing one, by name.
 
 import math
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 
 from soilwater.material.camclay import CamClay
@@ -23,7 +24,8 @@ PRESETS = {
 }
 
 _CAMCLAY_KEYS = {"lambda": "lam", "kappa": "kappa", "M": "M", "nu": "nu", "e0": "e0",
-                 "p0": "p0", "ocr": "ocr", "G": "G"}
+                 "p0": "p0", "ocr": "ocr", "G": "G", "e_ref": "e_ref",
+                 "sigma_v_ref": "sigma_v_ref"}
 _ELASTIC_KEYS = {"E": "E", "nu": "nu", "p0": "p0", "e0": "e0"}
 
 
@@ -78,18 +80,39 @@ def material_from_spec(spec):
             + f" (and in a case {', '.join(FLUID_KEYS)})")
     needed = _ELASTIC_NEEDS if model == "elastic" else _CAMCLAY_NEEDS
     missing = [k for k in needed if k not in values]
+    if model != "elastic" and not {"e_ref", "sigma_v_ref"} & set(values):
+        missing += [k for k in ("e0", "p0") if k not in values]
+    line = " or anchor its compression line (e_ref, sigma_v_ref)" if {"e0", "p0"} & set(
+        missing) and model != "elastic" else ""
     require(not missing, f"material: model {model!r} needs {', '.join(missing)}: set "
-            f"{'it' if len(missing) == 1 else 'them'} in [material] (or start from a "
+            f"{'it' if len(missing) == 1 else 'them'} in [material]{line} (or start from a "
             f"preset, e.g. preset = \"table1\")")
     kwargs = {keys[k]: v for k, v in values.items()}
     if model == "elastic":
         return LinearElastic(**kwargs)
-    return CamClay(model=model, **kwargs)
+    require(("e_ref" in values) == ("sigma_v_ref" in values), "material.e_ref and "
+            "material.sigma_v_ref anchor the compression line together: set both or neither")
+    start = {"e0": values.get("e_ref"), "p0": values.get("sigma_v_ref")}
+    require(start["e0"] is None or min(start.values()) > 0, f"material.e_ref = "
+            f"{start['e0']} and sigma_v_ref = {start['p0']} must be positive (a void ratio, "
+            "and kPa compression positive)")
+    return _on_line(CamClay(model=model, **{**start, **kwargs}), values)
+
+
+def _on_line(clay, values):
+    """``clay`` with p'0 and e0 on its anchored compression line where not given: p'0 =
+    ``sigma_v_ref`` and e0 that of the state ``(p'0, ocr p'0)`` on the line."""
+    if "e0" in values and "p0" in values:
+        return clay
+    p0 = values.get("p0", clay.sigma_v_ref)
+    v0 = clay.volume(p0, clay.ocr * p0, clay.anchor)
+    return replace(clay, p0=float(p0), e0=float(values.get("e0", v0 - 1)))
 
 
 #: Keys each model needs (the others have defaults: ``ocr`` 1, ``G`` from ``nu``, an
-#: elastic skeleton's ``p0`` and ``e0``).
-_CAMCLAY_NEEDS = ("lambda", "kappa", "M", "nu", "e0", "p0")
+#: elastic skeleton's ``p0`` and ``e0``, a Cam-clay's ``e0`` and ``p0`` on the line
+#: anchored by ``e_ref`` and ``sigma_v_ref``).
+_CAMCLAY_NEEDS = ("lambda", "kappa", "M", "nu")
 _ELASTIC_NEEDS = ("E", "nu")
 #: The oedometer's indices and the Cam-clay slopes they give: ``Cc = lambda ln 10``.
 _INDICES = {"Cc": "lambda", "Cr": "kappa"}

@@ -47,8 +47,9 @@ def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, 
         Current and initial positions of the top edge's nodes [m].
     weights : ndarray, shape (P,), optional
         Weights of the domain averages (current volumes); equal weights by default.
-    probes : iterable of (str, float)
-        Probe name and its pore pressure [kPa].
+    probes : iterable of (str, float, ndarray)
+        Probe name, its pore pressure [kPa] and its displacement (2,) [m] (the probe moves
+        with the soil).
     uniqueness : float, optional
         The :mod:`soilwater.diagnostics.bifurcation` indicator of the level, if asked for.
     segments : iterable of (Segment, ndarray, ndarray, float, float or None)
@@ -71,7 +72,8 @@ def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, 
         q [kPa]), ``err`` (:func:`stretching_error`), ``gamma`` (mean horizontal
         displacement of the top over the height), ``settlement`` (mean downward displacement
         of the top edge's nodes [m]), ``dt``, ``iterations``, ``substeps``, ``residual``,
-        ``p_w@NAME`` per probe, if given, ``uniqueness`` and per segment ``settlement@NAME``
+        ``p_w@NAME``, ``ux@NAME`` and ``uy@NAME`` [m] per probe, if given, ``uniqueness``
+        and per segment ``settlement@NAME``
         and ``pressure@NAME`` (:func:`segment_columns`); with ``cells``, ``min_angle``
         [degrees] and ``min_quality`` (the worst cell's
         :func:`soilwater.geometry.quality.cell_quality`), with ``rcond``, ``min_rcond``.
@@ -92,7 +94,7 @@ def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, 
             "gamma": np.mean(top[:, 0] - top0[:, 0]) / case.geometry.height,
             "settlement": -float(np.mean(top[:, 1] - top0[:, 1])),
             "dt": dt, "iterations": info["iterations"], "substeps": info["substeps"],
-            "residual": info["residual"], **{f"p_w@{name}": v for name, v in probes},
+            "residual": info["residual"], **_probe_columns(probes),
             **({"linear_iterations": info["linear_iterations"]}
                if info.get("linear_iterations") else {}),
             **({} if uniqueness is None else {"uniqueness": uniqueness}), **contact,
@@ -134,6 +136,15 @@ def segment_columns(segment, t, nodes, nodes0, reaction, plate=None):
     width = (segment.end - segment.start) * stretch
     return {f"settlement@{segment.name}": float(settlement),
             f"pressure@{segment.name}": float(-reaction / width)}
+
+
+def _probe_columns(probes):
+    """``p_w@NAME``, ``ux@NAME``, ``uy@NAME`` of each ``(name, p_w, u)``."""
+    columns = {}
+    for name, p_w, u in probes:
+        columns.update({f"p_w@{name}": float(p_w), f"ux@{name}": float(u[0]),
+                        f"uy@{name}": float(u[1])})
+    return columns
 
 
 def axial_strain(case, heights):

@@ -19,8 +19,9 @@ weight under the surcharge, integrated down from the top with the void ratio of 
 depth (``d sigma'_v / d depth = gamma'(e(sigma'_v))``), ``sigma'_h = sigma'_zz = k0
 sigma'_v``, and the state on the material's compression line: for Cam-clay p'c of the
 normally consolidated state at ``ocr sigma'_v`` and the specific volume of
-:meth:`soilwater.material.camclay.CamClay.volume`, anchored at ``e_ref`` under ``sigma_v_ref`` (a
-normally consolidated state) or at the material's e0 at p'0. A linear elastic skeleton
+:meth:`soilwater.material.camclay.CamClay.volume` on the material's line
+(:attr:`soilwater.material.camclay.CamClay.anchor`: ``material.e_ref`` under
+``sigma_v_ref``, or its e0 at p'0). A linear elastic skeleton
 keeps its e0. Tension is positive in the stresses, as everywhere.
 """
 
@@ -31,6 +32,7 @@ from scipy.integrate import solve_ivp
 
 from soilwater.errors import InputError
 from soilwater.material.kinematics import IDENTITY
+from soilwater.material.regions import Regions
 
 #: Standard gravity [m/s2]: gamma_w is a unit weight at G_N.
 G_N = 9.81
@@ -56,6 +58,13 @@ def initial_state(case, material, points):
         Positions in the initial configuration [m].
     """
     points = np.asarray(points, dtype=float).reshape(-1, 2)
+    if isinstance(material, Regions):
+        region = case.geometry.region_of(points)
+        if case.initial.stress == "uniform":
+            return material.initial_state(len(points), region=region)
+        sigma_v = _vertical_stress(case)(case.geometry.height - points[:, 1])
+        return material.gather([_geostatic(case, m, sigma_v[region == r]) for r, m in
+                                enumerate(material.materials)], region)
     if case.initial.stress == "uniform":
         return material.initial_state(len(points))
     return _geostatic(case, material, _vertical_stress(case)(case.geometry.height
@@ -75,22 +84,23 @@ def k0(case, material):
     return material.k0_nc() if value == "nc" else value
 
 
-def normal_void_ratio(case, material, sigma_v):
+def normal_void_ratio(material, sigma_v):
     """Void ratio of the normally consolidated one-dimensional state at ``sigma'_v`` [kPa]
-    on the case's compression line (Cam-clay): the line a geostatic start is anchored
-    on, and the one the material's own initial state lies on without ``e_ref``.
+    on the material's compression line (Cam-clay,
+    :attr:`soilwater.material.camclay.CamClay.anchor`): the line a geostatic start
+    lies on.
 
     Examples
     --------
     >>> from soilwater.case.loader import load_case
     >>> case = load_case("large-strain-column")
-    >>> round(float(normal_void_ratio(case, case.material(), 10.0)), 12)
+    >>> round(float(normal_void_ratio(case.material(), 10.0)), 12)
     2.4
     """
     nc = material.k0_nc()
     sigma_v = np.asarray(sigma_v, dtype=float)
     return material.volume((1 + 2 * nc) / 3 * sigma_v, _normal_size(material, sigma_v),
-                           _anchor(case, material)) - 1
+                           material.anchor) - 1
 
 
 def _geostatic(case, material, sigma_v):
@@ -102,7 +112,7 @@ def _geostatic(case, material, sigma_v):
         return stress, {"v": np.full(len(sigma_v), 1 + material.e0)}
     p, q = (1 + 2 * ratio) / 3 * sigma_v, abs(1 - ratio) * sigma_v
     pc = _normal_size(material, case.initial.ocr * sigma_v)
-    state = {"pc": pc, "v": material.volume(p, pc, _anchor(case, material))}
+    state = {"pc": pc, "v": material.volume(p, pc, material.anchor)}
     if np.any(material.yield_value(stress, state) > 1e-9):
         raise InputError(f"initial.k0 = {case.initial.k0} puts the geostatic stress outside "
                          f"the yield surface of ocr = {case.initial.ocr}: use a k0 nearer "
@@ -116,31 +126,44 @@ def _normal_size(material, sigma_v):
     return material.size((1 + 2 * nc) / 3 * sigma_v, (1 - nc) * sigma_v)
 
 
-def _anchor(case, material):
-    """A state ``(p', p'c, v)`` on the compression line: the normally consolidated state
-    at ``initial.sigma_v_ref`` with ``e_ref``, or the material's initial state."""
-    init = case.initial
-    if init.e_ref is None:
-        return material.p0, material.ocr * material.p0, material.v0
-    nc = material.k0_nc()
-    return ((1 + 2 * nc) / 3 * init.sigma_v_ref, _normal_size(material, init.sigma_v_ref),
-            1 + init.e_ref)
-
-
 @lru_cache(maxsize=16)
 def _vertical_stress(case):
     """``depth -> sigma'_v`` [kPa] of a geostatic start: the buoyant weight integrated
-    from the surcharge at the top, each depth's void ratio from its own stress."""
-    material, surcharge = case.material(), case.initial.surcharge
+    from the surcharge at the top, each depth's void ratio from its own stress (and its
+    own layer's material: the regions met down the middle of a mesh,
+    :meth:`soilwater.geometry.mesh.Mesh.layers`)."""
+    material, height = case.material(), case.geometry.height
+    layers = [(height, 0.0, material)]
+    if isinstance(material, Regions):
+        layers = [(top, bottom, material.materials[r])
+                  for top, bottom, r in case.geometry.mesh.layers()]
+    pieces, start = [], case.initial.surcharge
+    for top, bottom, layer in layers:
+        pieces.append((height - top, _layer(case, layer, start, top - bottom)))
+        start = float(pieces[-1][1](top - bottom))
 
+    def sigma_v(depth):
+        depth = np.clip(np.asarray(depth, float), 0.0, height)
+        k = np.searchsorted([d for d, _ in pieces], depth, side="right") - 1
+        out = np.empty(depth.shape)
+        for i, (d, piece) in enumerate(pieces):
+            at = k == i
+            if at.any():
+                out[at] = piece(depth[at] - d)
+        return out
+    return sigma_v
+
+
+def _layer(case, material, top, thickness):
+    """``depth below the layer's top -> sigma'_v`` [kPa] in one layer of ``material``
+    under ``top`` [kPa]."""
     def weight(sigma_v):
         _, state = _geostatic(case, material, np.atleast_1d(sigma_v))
         return buoyant_weight(case, state["v"])
 
-    height = case.geometry.height
     if not material.plastic or case.gravity.g == 0:
-        slope = float(weight(surcharge)[0])
-        return lambda depth: surcharge + slope * np.asarray(depth)
-    sol = solve_ivp(lambda d, s: weight(s), (0.0, height), [surcharge], dense_output=True,
-                    rtol=1e-11, atol=1e-12 * max(surcharge, 1.0))
-    return lambda depth: sol.sol(np.clip(depth, 0.0, height))[0]
+        slope = float(weight(top)[0])
+        return lambda depth: top + slope * np.asarray(depth)
+    sol = solve_ivp(lambda d, s: weight(s), (0.0, thickness), [top], dense_output=True,
+                    rtol=1e-11, atol=1e-12 * max(top, 1.0))
+    return lambda depth: sol.sol(np.clip(depth, 0.0, thickness))[0]

@@ -51,8 +51,7 @@ class Scales:
     def of(cls, case, material):
         effective, state = initial_state(case, material, case.nodes())
         edges = [edge for _, edge in case.boundary.items()]
-        tractions = [abs(np.asarray(e.traction, float)).max() for e in edges
-                     if e.traction != "exact"]
+        tractions = [e.largest_traction for e in edges]
         p, _ = invariants(effective)
         modulus = float(np.median(material.constrained_modulus(p, state["v"])))
         free = any({"free", "rigid"} & (kx | ky) for kx, ky in

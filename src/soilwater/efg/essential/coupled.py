@@ -13,6 +13,7 @@ import numpy as np
 from soilwater.efg.discretisation import gradient, pressure_gradient
 from soilwater.efg.essential import nitsche
 from soilwater.material.kinematics import cauchy_traction, invariants
+from soilwater.material.regions import fluid_at
 from soilwater.nonlinear.newton import material_update
 from soilwater.physics import weakform
 
@@ -46,7 +47,7 @@ class NitscheStep:
             stress_n, state_n = sub.phi @ points.stress, {k: sub.phi @ v
                                                           for k, v in points.state.items()}
         self.all_n = stress_n, state_n
-        self.terms = _nitsche_terms(model, disc, dt, domain, (stress_n, state_n["v"]))
+        self.terms = _nitsche_terms(model, disc, dt, domain, (stress_n, state_n))
         # the weak form only where a component is held: a free point carries no term
         # (and the soil at a free surface may be past what its return mapping handles)
         self.held = h = np.flatnonzero(self.terms.mask.any(axis=1))
@@ -60,7 +61,8 @@ class NitscheStep:
     def residual(self, du, p, gaps, timings):
         """Residual coefficients (G, 3, 3) of the iterate ``du``, ``p`` with the gaps
         (G, 3) of ``(ux, uy, p_w)``."""
-        model, disc, fluid, h = self.model, self.disc, self.model.case.fluid, self.held
+        model, disc, h = self.model, self.disc, self.held
+        fluid = fluid_at(model.case.fluid, model.material, self.state_n)
         (self.stress, self.state, self.material_tangent, self.J, self.Finv,
          _) = material_update(model.material, self.stress_n, self.state_n,
                               gradient(disc.sub, du, len(p))[h], timings,
@@ -82,7 +84,8 @@ class NitscheStep:
         at the boundary points (zero at the free ones)."""
         c = weakform.tangent(self.material_tangent, self.stress, self.total, self.J,
                              self.Finv, self.disc.bp.weights[self.held],
-                             self.model.case.fluid, self.dt, self.model.beta,
+                             fluid_at(self.model.case.fluid, self.model.material,
+                                      self.state_n), self.dt, self.model.beta,
                              self.state_n["v"], self.grad_p)
         values = np.zeros((len(self.disc.bp.weights), c.values.shape[1]))
         values[self.held] = c.values
@@ -109,21 +112,22 @@ class NitscheStep:
 
 def _nitsche_terms(model, disc, dt, domain, boundary):
     """:class:`soilwater.efg.essential.nitsche.Nitsche` of a step on ``(ux, uy, p_w)`` (see
-    :class:`NitscheStep`); ``domain`` and ``boundary`` are the start-of-step ``(stress, v)``
-    at the integration and the boundary points."""
+    :class:`NitscheStep`); ``domain`` and ``boundary`` are the start-of-step ``(stress,
+    state)`` at the integration and the boundary points."""
     fluid, sc, bc, bp = model.case.fluid, model.scales, disc.bc, disc.bp
     compressibility = (fluid.storage + fluid.biot_alpha**2 / sc.modulus) * sc.h**2
-    (stress, v), (stress_b, v_b) = domain, boundary
+    (stress, state), (stress_b, state_b) = domain, boundary
+    v, v_b = state["v"], state_b["v"]
 
-    def darcy(v, extra=0.0):         # (0, 1 + k, 0, 1 + k) of one field, no weight
-        value = dt * fluid.mobility_at(v)[0] + extra
+    def darcy(at, extra=0.0):        # (0, 1 + k, 0, 1 + k) of one field, no weight
+        value = dt * fluid_at(fluid, model.material, at).mobility_at(at["v"])[0] + extra
         return weakform.Coefficients.of({(0, 1 + k, 0, 1 + k): value for k in range(2)},
                                         (1, 1))
 
     mask = np.column_stack([bc.constrained[:, 0], bc.constrained[:, 1] | bc.rigid,
                             bc.drained])
     D = _elastic_operator(model.material, stress_b, v_b).columns()
-    for (_, s, _, t), value in darcy(v_b).columns().items():
+    for (_, s, _, t), value in darcy(state_b).columns().items():
         D[2, s, 2, t] = -value                     # the continuity equation's sign
     terms = nitsche.Nitsche.build(bp, mask, weakform.Coefficients.of(D, (3, 3)),
                                   np.zeros(3))
@@ -132,9 +136,9 @@ def _nitsche_terms(model, disc, dt, domain, boundary):
         (disc.su, disc.w, _elastic_operator(model.material, stress, v)),
         (disc.sub, bp.weights, terms.operator.block(u, u)))
     lam_p = nitsche.largest_eigenvalue(
-        (disc.sp, disc.w, darcy(v, compressibility)),
+        (disc.sp, disc.w, darcy(state, compressibility)),
         (disc.spb, bp.weights, nitsche.flux_operator(bp, mask[:, 2:],
-                                                     darcy(v_b, compressibility))))
+                                                     darcy(state_b, compressibility))))
     return replace(terms, beta=nitsche.SAFETY * np.array([lam_u, lam_u, -lam_p]))
 
 

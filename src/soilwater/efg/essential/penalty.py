@@ -8,13 +8,18 @@ level below which a residual entry carrying a penalty force is round-off
 
 import numpy as np
 
+from soilwater.material.regions import Regions
+
 
 def factors(model, times):
-    """Penalty factors: displacement (P-wave modulus / h) and pore pressure."""
+    """Penalty factors: displacement (P-wave modulus / h) and pore pressure (with material
+    regions, of the most permeable)."""
     case = model.case
     sc = model.scales
     dt = float(np.max(np.diff(times)))
-    flow = (dt * case.fluid.mobility + case.fluid.storage * sc.h**2
+    k = (max(model.material.permeability) if isinstance(model.material, Regions)
+         else case.fluid.permeability)
+    flow = (dt * (k / case.fluid.gamma_w) + case.fluid.storage * sc.h**2
             + case.fluid.biot_alpha**2 * sc.h**2 / sc.modulus)
     return {"penalty_alpha_u": case.efg.penalty * sc.modulus / sc.h,
             "penalty_alpha_p": case.efg.penalty * flow / sc.h}

@@ -43,7 +43,7 @@ def column(case):
     material, fluid = case.material(), case.fluid
     assert case.gravity.g in (0.0, G_N), "Gibson's column weighs at standard gravity"
     clay = gibson_clay.Clay(lam=material.lam, kappa=material.kappa, sigma_v_ref=SIGMA_REF,
-                       e_ref=float(normal_void_ratio(case, material, SIGMA_REF)),
+                       e_ref=float(normal_void_ratio(material, SIGMA_REF)),
                        permeability=fluid.permeability,
                        permeability_law=fluid.permeability_law,
                        permeability_e=fluid.permeability_e,
@@ -81,8 +81,8 @@ def static_settlement(case):
     top = start + extra * float(case.loading.factor(case.time.end))
     z = np.linspace(0.0, Z, 20001)
     weight = (fluid.specific_gravity - 1) * fluid.gamma_w * case.gravity.g / G_N
-    return float(H - np.trapezoid(1 + normal_void_ratio(case, material,
-                                                        top + weight * (Z - z)), z))
+    return float(H - np.trapezoid(1 + normal_void_ratio(material, top + weight * (Z - z)),
+                                  z))
 
 
 def _runs():

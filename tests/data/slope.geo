@@ -1,0 +1,30 @@
+// A slope of fill over clay, 20 m x 10 m: the file of tests/test_mesh_geometry.py
+// (meshed with gmsh -2 -format msh41 slope.geo into slope.msh).
+h = 1.0;
+Point(1) = {0, 0, 0, h};
+Point(2) = {20, 0, 0, h};
+Point(3) = {20, 6, 0, h};
+Point(4) = {12, 6, 0, h};
+Point(5) = {6, 10, 0, h};
+Point(6) = {0, 10, 0, h};
+Point(7) = {0, 6, 0, h};
+Line(1) = {1, 2};
+Line(2) = {2, 3};
+Line(3) = {3, 4};
+Line(4) = {4, 5};
+Line(5) = {5, 6};
+Line(6) = {6, 7};
+Line(7) = {7, 1};
+Line(8) = {7, 4};
+Curve Loop(1) = {1, 2, 3, -8, 7};
+Plane Surface(1) = {1};
+Curve Loop(2) = {8, 4, 5, 6};
+Plane Surface(2) = {2};
+Physical Curve("base") = {1};
+Physical Curve("left") = {6, 7};
+Physical Curve("right") = {2};
+Physical Curve("ground") = {3};
+Physical Curve("face") = {4};
+Physical Curve("crest") = {5};
+Physical Surface("clay") = {1};
+Physical Surface("fill") = {2};

@@ -1,0 +1,205 @@
+"""Cases on a user's mesh (geometry.mesh, soilwater.geometry.mesh): read with meshio or
+meshed by gmsh, physical curves as boundary groups, every triangle method on it, and the
+one-line refusals of a mesh soilwater cannot take."""
+
+import re
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pytest
+
+import soilwater
+from soilwater.case.loader import load_case
+from soilwater.case.validation import case_from_dict
+from soilwater.errors import InputError
+from soilwater.fem.spaces import initial_mesh
+from soilwater.geometry.mesh import read_mesh
+
+DATA = Path(__file__).parent / "data"
+
+
+def write_msh(path, points, triangles, lines, regions=None):
+    """A gmsh file (format 2.2) of ``triangles`` (T, 3) on ``points`` (N, 2) with the
+    physical curves ``lines`` ``{name: (F, 2) vertex pairs}`` and the physical surfaces
+    ``regions`` ``{name: (T,) bool}`` (one surface ``soil`` by default)."""
+    regions = regions or {"soil": np.ones(len(triangles), bool)}
+    names = list(lines) + list(regions)
+    cells = [("line", np.asarray(pairs)) for pairs in lines.values()]
+    cells += [("triangle", np.asarray(triangles)[mask]) for mask in regions.values()]
+    tags = [np.full(len(block[1]), k + 1) for k, block in enumerate(cells)]
+    meshio.write(path, meshio.Mesh(np.column_stack([points, np.zeros(len(points))]), cells,
+                                   cell_data={"gmsh:physical": tags,
+                                              "gmsh:geometrical": tags},
+                                   field_data={name: np.array([k + 1, 1 + (k >= len(lines))])
+                                               for k, name in enumerate(names)}),
+                 file_format="gmsh22", binary=False)
+
+
+def grid_as_mesh(case, path):
+    """``case`` (a rectangle) written as a mesh: the triangles of its FEM reference, the
+    four edges as physical curves of their own names."""
+    mesh = initial_mesh(case, "fem-p1p1")
+    points, loop = mesh.p.T, case.boundary_loop()
+    ends = np.stack([loop, np.roll(loop, -1)], axis=1)
+    edge = case.geometry.edge_of(points[ends[:, 0]], points[ends[:, 1]])
+    write_msh(path, points, mesh.t.T, {name: ends[edge == k]
+                                       for k, name in enumerate(case.geometry.edges)})
+
+
+def on_mesh(case, path):
+    """The case with its rectangle replaced by the mesh file ``path``."""
+    data = case.to_dict()
+    data["geometry"] = {"mesh": str(path)}
+    data.pop("discretisation")
+    return case_from_dict(data)
+
+
+@pytest.fixture
+def terzaghi_mesh(tmp_path):
+    grid = load_case("terzaghi", ("discretisation.nx=3",))
+    grid_as_mesh(grid, tmp_path / "column.msh")
+    return grid, on_mesh(grid, tmp_path / "column.msh")
+
+
+def test_a_rectangle_read_as_a_mesh_is_the_grid_case(terzaghi_mesh):
+    """Terzaghi's column written as a .msh (the FEM reference's triangles, its four edges
+    as physical curves) gives the grid case's run: the same nodes, triangles and boundary
+    data, so fem-th and efg-paper (Delaunay cells on the same nodes) give the same
+    history to 1e-9, and efg (the mesh's triangles as its cells, where the grid case
+    takes Delaunay's of cocircular nodes) the same pore pressure to 1e-3 of the load."""
+    grid, mesh = terzaghi_mesh
+    assert np.array_equal(np.sort(mesh.nodes(), axis=0), np.sort(grid.nodes(), axis=0))
+    for method, tol in (("fem-th", 1e-9), ("efg-paper", 1e-9), ("efg", 1e-3)):
+        a = soilwater.solve(mesh, method, progress=False).history
+        b = soilwater.solve(grid, method, progress=False).history
+        np.testing.assert_allclose(a["p_w@p5"], b["p_w@p5"], rtol=0, atol=tol * 1e-3)
+        assert a["settlement"].iloc[-1] == pytest.approx(b["settlement"].iloc[-1], rel=tol)
+
+
+def test_a_user_slope_runs_in_every_triangle_method():
+    """The slope of fill over clay (tests/data/slope.msh, written by gmsh from slope.geo:
+    six physical curves, two physical surfaces) loaded on its crest: every triangle
+    method runs it, and EFG's crest settlement and pore pressure under the crest lie
+    within 5 % of fem-th's."""
+    case = load_case(DATA / "slope.toml")
+    assert case.geometry.mesh.groups == ("base", "crest", "face", "ground", "left", "right")
+    assert case.geometry.mesh.regions == ("clay", "fill")
+    runs = {m: soilwater.solve(case, m, progress=False).history
+            for m in ("efg", "efg-paper", "fem-th", "fem-p1p1-stab")}
+    ref = runs["fem-th"].iloc[-1]
+    assert ref["settlement"] > 0
+    for method, history in runs.items():
+        last = history.iloc[-1]
+        assert last["settlement"] == pytest.approx(ref["settlement"], rel=0.05), method
+        assert last["p_w@under"] == pytest.approx(ref["p_w@under"], rel=0.05), method
+
+
+def test_a_geo_file_is_meshed_by_gmsh():
+    """The same slope from its .geo: gmsh meshes it into the vertices of the .msh."""
+    pytest.importorskip("gmsh")
+    geo, msh = read_mesh(DATA / "slope.geo"), read_mesh(DATA / "slope.msh")
+    assert len(geo.points) == len(msh.points) and geo.groups == msh.groups
+
+
+def test_a_geostatic_start_needs_a_level_ground():
+    with pytest.raises(InputError, match="surface falls to y = 6 m at x = 20 m"):
+        load_case(DATA / "slope.toml", ("initial.stress=geostatic",))
+
+
+def test_quadrilateral_methods_refuse_a_triangle_mesh():
+    case = load_case(DATA / "slope.toml")
+    with pytest.raises(InputError, match="fem-q1q1 needs a structured grid"):
+        soilwater.solve(case, "fem-q1q1", progress=False)
+
+
+def _square(tmp_path, name="square.msh", shift=0.0, named=("bottom", "right", "top",
+                                                            "left")):
+    """A unit square of two triangles, its sides as physical curves ``named`` (None:
+    left out)."""
+    points = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float) + shift
+    sides = [[0, 1], [1, 2], [2, 3], [3, 0]]
+    write_msh(tmp_path / name, points, [[0, 1, 2], [0, 2, 3]],
+              {n: [s] for n, s in zip(named, sides) if n})
+    return tmp_path / name
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"geometry": {"mesh": "nowhere.msh"}}, "does not exist"),
+    ({"geometry": {"mesh": "square.vtk"}}, "give a gmsh mesh"),
+    ({"geometry": {"mesh": "square.msh", "width": 1.0}}, "give mesh and no width"),
+    ({"discretisation": {"nx": 3}}, "discretisation.nx: a case on a mesh"),
+    ({"boundary": {"side": {}}}, "unknown boundary group (physical curve of geometry.mesh) "
+                                 "'side'"),
+    ({"boundary": {"bottom": {"pad": {"from": 0.0, "to": 0.5}}}},
+     "named segments are for the rectangle"),
+    ({"boundary": {"bottom": {"uy": "rigid"}}}, "'rigid' applies to a rectangle"),
+    ({"boundary": {"bottom": {"ux": "fixed"}}}, "not supported along y"),
+    ({"boundary": {"bottom": {"ux": "fixed"}, "left": {"uy": "fixed"}}},
+     "not supported against rotation"),
+    ({"probes": {"out": [2.0, 0.5]}}, "probes.out = [2.0, 0.5] lies outside"),
+])
+def test_a_bad_mesh_case_is_refused_in_one_line(tmp_path, change, message):
+    _square(tmp_path)
+    (tmp_path / "square.vtk").write_text("")
+    data = {"geometry": {"mesh": "square.msh"}, "material": {"model": "elastic",
+                                                              "E": 1e3, "nu": 0.3},
+            "boundary": {"bottom": {"displacement": "fixed"},
+                         "left": {"displacement": "roller"}},
+            "time": {"end": 1.0, "steps": 1}}
+    data.update(change)
+    data["geometry"] = {k: str(tmp_path / v) if k == "mesh" else v
+                        for k, v in data["geometry"].items()}
+    with pytest.raises(InputError, match=re.escape(message)):
+        case_from_dict(data)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"shift": 1.0}, "lower-left corner is at (1, 1), not at the origin"),
+    ({"named": ("bottom", "right", None, "left")}, "1 boundary facet(s) belong to no "
+                                                   "physical curve"),
+    ({"named": (None, None, None, None)}, "no physical curve names the boundary"),
+])
+def test_a_mesh_soilwater_cannot_take_is_refused_in_one_line(tmp_path, kwargs, message):
+    path = _square(tmp_path, **kwargs)
+    with pytest.raises(InputError, match=re.escape(message)):
+        read_mesh(path)
+
+
+def test_a_mesh_with_a_hole_is_refused(tmp_path):
+    """A square frame (a hole in the middle): two boundary loops."""
+    outer = np.array([[0, 0], [3, 0], [3, 3], [0, 3]], float)
+    inner = np.array([[1, 1], [2, 1], [2, 2], [1, 2]], float)
+    points = np.vstack([outer, inner])
+    triangles = [[0, 1, 5], [0, 5, 4], [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6],
+                 [3, 0, 4], [3, 4, 7]]
+    write_msh(tmp_path / "frame.msh", points, triangles,
+              {"outer": [[0, 1], [1, 2], [2, 3], [3, 0]],
+               "inner": [[4, 5], [5, 6], [6, 7], [7, 4]]})
+    with pytest.raises(InputError, match="not one loop"):
+        read_mesh(tmp_path / "frame.msh")
+
+
+def test_a_geo_file_without_gmsh_says_how_to_get_it(monkeypatch):
+    import builtins
+
+    real = builtins.__import__
+
+    def no_gmsh(name, *args, **kwargs):
+        if name == "gmsh":
+            raise ImportError(name)
+        return real(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_gmsh)
+    with pytest.raises(InputError, match=r"needs the gmsh package .*soilwater\[geometry\]"):
+        read_mesh(DATA / "slope.geo")
+
+
+def test_the_resolved_case_names_the_mesh_file_and_reloads(tmp_path):
+    """A mesh case's dict holds the mesh's absolute path and no [discretisation], and
+    replace() (which goes through that dict) reloads it."""
+    case = load_case(DATA / "slope.toml")
+    data = case.to_dict()
+    assert data["geometry"] == {"shape": "mesh", "mesh": str((DATA / "slope.msh").resolve())}
+    assert data["discretisation"] == {}
+    assert len(case.replace("time.steps=2").nodes()) == len(case.nodes())
