@@ -94,6 +94,20 @@ def test_load_case_and_replace_validate_a_changed_case():
         assert ">= 0" in message
 
 
+def test_replace_changes_a_resolved_cases_model_and_names_what_it_needs():
+    """A resolved Cam-clay case (its parameters written out) switched to elastic drops
+    the Cam-clay keys and asks for E; with E it is the elastic skeleton, keeping nu, e0
+    and p0; and back to Cam-clay the same way."""
+    case = soilwater.load_case("strip-footing")
+    with pytest.raises(soilwater.InputError, match="model 'elastic' needs E"):
+        case.replace("material.model=elastic")
+    elastic = case.replace("material.model=elastic", "material.E=100")
+    assert (elastic.material().E, elastic.material().nu) == (100.0, 0.333)
+    with pytest.raises(soilwater.InputError, match="needs lambda, kappa, M"):
+        elastic.replace("material.model=modified")
+    assert case.replace("material.model=modified").material().model == "modified"
+
+
 def test_dataclasses_replace_skips_validation_which_replace_does_not():
     case = soilwater.load_case("terzaghi")
     fluid = dataclasses.replace(case.fluid, permeability=-1.0)

@@ -79,20 +79,23 @@ def test_a_rectangle_read_as_a_mesh_is_the_grid_case(terzaghi_mesh):
 
 def test_a_user_slope_runs_in_every_triangle_method():
     """The slope of fill over clay (tests/data/slope.msh, written by gmsh from slope.geo:
-    six physical curves, two physical surfaces) loaded on its crest: every triangle
-    method runs it, and EFG's crest settlement and pore pressure under the crest lie
-    within 5 % of fem-th's."""
+    six physical curves, two physical surfaces, each its own soil) loaded on its crest:
+    every triangle method runs it, and each one's crest settlement and pore pressure
+    under the crest lie within 6 % of fem-th's (measured: efg 4.6 % stiffer, the most,
+    where the soils meet and at the load's edge; efg-paper 1.4 %, fem-p1p1-stab 0.9 %;
+    pore pressures within 2.2 %)."""
     case = load_case(DATA / "slope.toml")
     assert case.geometry.mesh.groups == ("base", "crest", "face", "ground", "left", "right")
     assert case.geometry.mesh.regions == ("clay", "fill")
+    assert [m.E for m in case.material().materials] == [10000.0, 30000.0]
     runs = {m: soilwater.solve(case, m, progress=False).history
             for m in ("efg", "efg-paper", "fem-th", "fem-p1p1-stab")}
     ref = runs["fem-th"].iloc[-1]
     assert ref["settlement"] > 0
     for method, history in runs.items():
         last = history.iloc[-1]
-        assert last["settlement"] == pytest.approx(ref["settlement"], rel=0.05), method
-        assert last["p_w@under"] == pytest.approx(ref["p_w@under"], rel=0.05), method
+        assert last["settlement"] == pytest.approx(ref["settlement"], rel=0.06), method
+        assert last["p_w@under"] == pytest.approx(ref["p_w@under"], rel=0.06), method
 
 
 def test_a_geo_file_is_meshed_by_gmsh():

@@ -43,8 +43,9 @@ class Discretisation:
 
     @property
     def regular(self):
-        """True when the grid lines are equally spaced along both axes (no pieces)."""
-        return not (self.x or self.y)
+        """True when the grid lines are equally spaced along both axes (no pieces; a mesh
+        has no grid lines)."""
+        return self.layout != MESH and not (self.x or self.y)
 
     def to_dict(self):
         """The ``[discretisation]`` table: ``x`` (``y``) instead of ``nx`` (``ny``) where

@@ -42,7 +42,7 @@ def builtin_cases():
     Examples
     --------
     >>> list(builtin_cases())[:3]
-    ['cantilever', 'large-strain-column', 'mandel']
+    ['cantilever', 'embankment', 'large-strain-column']
     """
     return {name: case_from_dict(_read_toml(entry, name))
             for name, entry in _builtin_files().items()}

@@ -84,6 +84,12 @@ Schema (every case has the same one; unknown keys are an error)::
     specific_gravity = 2.65           # Gs of the solids > 1: the saturated unit weight
                                       # (Gs + e) gamma_w / (1 + e); only with [gravity]
 
+    [material.crust]                  # optional, on a mesh: the physical surface "crust"
+    lambda = 0.1                      # gets [material]'s skeleton with these keys
+    permeability = 1e-8               # changed (a table with model or preset starts
+                                      # afresh) and its own permeability; the water and
+                                      # Gs stay [material]'s (soilwater.case.regions)
+
     [gravity]                         # optional
     g = 9.81                          # m/s2 >= 0 along -y (default 0: weightless); the
                                       # buoyant weight (Gs - 1) gamma_w (g / 9.81) / (1 + e)
@@ -109,7 +115,9 @@ Schema (every case has the same one; unknown keys are an error)::
     uy = "free"
     # displacement = "roller"         # shorthand instead of ux/uy: "roller" (normal
                                       # component fixed), "fixed" or "free"
-    traction = [0.0, 0.0]             # total traction [kPa] x load factor (default zero)
+    traction = [0.0, 0.0]             # total traction [kPa] x load factor (default zero),
+                                      # or a profile [[x, tx, ty], ...] piecewise linear
+                                      # in the initial x (increasing; constant beyond)
     water = "impermeable"             # or "drained" (p_w = 0); drained wins at a corner
 
     [boundary.top.footing]            # optional named segments of an edge (any name of
@@ -144,7 +152,8 @@ Schema (every case has the same one; unknown keys are an error)::
                                       # its summary says where and why it stopped
 
     [probes]                          # optional: name = [x, y] inside the domain;
-    centre = [1.5, 2.0]               # history columns are named like "p_w@centre"
+    centre = [1.5, 2.0]               # history columns p_w@centre [kPa] and ux@centre,
+                                      # uy@centre [m] (the probe moves with the soil)
 
     [exact]                           # optional: a closed form of soilwater.references.closed_forms
     solution = "timoshenko-beam"      # boundary data for "exact" edges, error reference
@@ -328,7 +337,11 @@ def apply_override(data, text):
         Setting ``time.steps`` drops the geometric keys (and the reverse), setting
         ``discretisation.nx`` drops ``discretisation.x`` (and the reverse, likewise for y);
         setting an edge's ``displacement`` replaces its ``ux`` and ``uy``, and setting ``ux`` or
-        ``uy`` of an edge given by ``displacement`` expands the shorthand first.
+        ``uy`` of an edge given by ``displacement`` expands the shorthand first; setting
+        ``material.model`` (or a region's) drops the skeleton keys the new model does not
+        take (``lambda`` ... for ``elastic``, ``E`` and ``mv`` for Cam-clay), so that a
+        resolved case (:meth:`soilwater.case.model.Case.replace`) can change its model and
+        is then told which keys the new one needs.
 
     Raises
     ------
@@ -356,15 +369,21 @@ def apply_override(data, text):
         require(isinstance(table, dict), f"override {text!r}: "
                 f"{'.'.join(path[:depth + 1])} is a value, not a section")
     last = path[-1]
-    for other in _replaced_keys(path):
+    for other in _replaced_keys(path, value):
         table.pop(other, None)
     if len(path) == 3 and last in ("ux", "uy") and "displacement" in table:
         table.update(expand_displacement(table.pop("displacement"), path[1]))
     table[last] = value
 
 
-def _replaced_keys(path):
-    """Keys that an override of ``path`` replaces (the other way of saying the same)."""
+def _replaced_keys(path, value):
+    """Keys that an override of ``path`` with ``value`` replaces (the other way of saying
+    the same, or another model's parameters)."""
+    if path[0] == "material" and path[-1] == "model" and len(path) <= 3:
+        from soilwater.material.presets import model_keys
+
+        others = {"elastic", "original"} - {"elastic" if value == "elastic" else "original"}
+        return tuple(model_keys(others.pop()) - model_keys(value))
     if path[0] == "time" and path[-1] == "steps":
         return GEOMETRIC
     if path[0] == "time" and path[-1] in GEOMETRIC:

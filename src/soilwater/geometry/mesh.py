@@ -15,6 +15,7 @@ in exactly one physical curve.
 import os
 import tempfile
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -58,6 +59,25 @@ class Mesh:
     loop: np.ndarray
     group: np.ndarray
     groups: tuple
+
+    def __eq__(self, other):
+        return isinstance(other, Mesh) and self.digest == other.digest
+
+    def __hash__(self):
+        return hash(self.digest)
+
+    @cached_property
+    def digest(self):
+        """sha256 of the mesh's content (vertices, triangles, groups and regions): what a
+        cached run on it depends on, and what makes two meshes equal; not the file's
+        name."""
+        import hashlib
+
+        digest = hashlib.sha256()
+        for array in (self.points, self.triangles, self.region, self.loop, self.group):
+            digest.update(np.ascontiguousarray(array).tobytes())
+        digest.update(repr((self.regions, self.groups)).encode())
+        return digest.hexdigest()
 
     @property
     def size(self):

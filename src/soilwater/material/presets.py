@@ -109,6 +109,20 @@ def _on_line(clay, values):
     return replace(clay, p0=float(p0), e0=float(values.get("e0", v0 - 1)))
 
 
+def model_keys(model):
+    """The ``[material]`` skeleton keys that ``model`` takes (``elastic`` or a Cam-clay
+    model), aliases included.
+
+    Examples
+    --------
+    >>> sorted(model_keys("elastic"))
+    ['E', 'e0', 'mv', 'nu', 'p0']
+    """
+    if model == "elastic":
+        return {*_ELASTIC_KEYS, "mv"}
+    return {*_CAMCLAY_KEYS, *_INDICES}
+
+
 #: Keys each model needs (the others have defaults: ``ocr`` 1, ``G`` from ``nu``, an
 #: elastic skeleton's ``p0`` and ``e0``, a Cam-clay's ``e0`` and ``p0`` on the line
 #: anchored by ``e_ref`` and ``sigma_v_ref``).

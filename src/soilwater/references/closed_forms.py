@@ -313,6 +313,54 @@ def flamant_settlement(force, G, nu, ratio):
     return np.asarray(force) * (1 - nu) * np.log(ratio) / (np.pi * G)
 
 
+def surface_load_pressure(x, z, xs, qs):
+    """Undrained excess pore pressure [kPa] under a surface pressure on an incompressible
+    elastic half-plane, the load symmetric about x = 0.
+
+    In plane strain the stresses of a surface load on a homogeneous half-plane do not
+    depend on the elastic constants, and ``sigma_x + sigma_z`` is the harmonic function
+    that is ``-2 q`` on the loaded surface (Poisson's integral); undrained with
+    incompressible constituents (nu_u = 1/2, B = 1), the pore pressure takes the mean total
+    stress, ``p_w = -(sigma_x + sigma_z) / 2``:
+
+    ``p_w(x, z) = (1/pi) int q(s) z / ((x - s)^2 + z^2) ds``,
+
+    here with q piecewise linear through ``(xs, qs)`` for ``s >= 0``, mirrored to ``s <
+    0``, zero beyond ``xs[-1]``: integrated in closed form on each piece. Under the middle
+    of a uniform strip of half-width b it is ``(2 q / pi) atan(b / z)``.
+
+    Parameters
+    ----------
+    x, z : array_like
+        Horizontal position and depth below the surface [m] (z > 0).
+    xs, qs : array_like
+        The load's profile from the axis: positions [m], increasing from 0, and the
+        pressure there [kPa, compression positive].
+
+    Examples
+    --------
+    >>> b, z = 5.0, 2.0
+    >>> round(float(surface_load_pressure(0.0, z, [0.0, b], [100.0, 100.0])), 6)
+    75.776212
+    >>> round(float(2 * 100 / np.pi * np.arctan(b / z)), 6)
+    75.776212
+    """
+    x, z = np.asarray(x, float)[..., None], np.asarray(z, float)[..., None]
+    xs, qs = np.asarray(xs, float), np.asarray(qs, float)
+    a, b, qa, qb = xs[:-1], xs[1:], qs[:-1], qs[1:]
+    slope = (qb - qa) / (b - a)
+
+    def piece(lo, hi, q0, c, x):          # int (q0 + c (s - lo)) z / ((x - s)^2 + z^2) ds
+        def F(s):                         # antiderivative in t = s - x
+            t = s - x
+            return (q0 + c * (x - lo)) * np.arctan(t / z) + c * z / 2 * np.log(t**2 + z**2)
+        return F(hi) - F(lo)
+
+    right = piece(a, b, qa, slope, x)
+    left = piece(a, b, qa, slope, -x)     # the mirror image: s -> -s
+    return (right + left).sum(axis=-1) / np.pi
+
+
 def undrained_poisson(material, fluid):
     """Undrained Poisson's ratio of a skeleton with its pore fluid, at the initial state:
     ``(3 K_u - 2 G) / (2 (3 K_u + G))`` with ``K_u = K + alpha^2 / S`` (1/2 when the

@@ -20,5 +20,6 @@ STUDIES = {study.name: study for study in (
     Study("footing-pictures", "soilwater.studies.footing.pictures_report"),
     Study("shearband", "soilwater.studies.shearband.report"),
     Study("large-strain", "soilwater.studies.large_strain.report"),
+    Study("embankment", "soilwater.studies.embankment.report"),
     Study("essential", "soilwater.studies.essential.report"),
 )}

@@ -58,14 +58,17 @@ class Job:
     def key(self):
         """Cache key: the resolved case without the other methods' settings (an EFG run
         does not read ``[fem]``, nor a FEM run ``[efg]``), the method, the linear solver
-        and the code."""
+        and the code; on a mesh, its content (:attr:`soilwater.geometry.mesh.Mesh.digest`)."""
         with linear_solver(self.linear_solver):
             solver = identity()
-        case = load_case(self.case, self.overrides).to_dict()
+        resolved = load_case(self.case, self.overrides)
+        case = resolved.to_dict()
         case.pop("fem" if self.method in EFG_METHODS else "efg", None)
         spec = {"case": case,
                 "method": self.method, "linear_solver": solver,
                 "code": code_version(self.method)}
+        if resolved.geometry.mesh is not None:
+            spec["mesh"] = resolved.geometry.mesh.digest
         return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:24]
 
 

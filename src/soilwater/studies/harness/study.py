@@ -68,9 +68,9 @@ class Saved:
 
 
 def source_hash(folders, solvers=_SOLVERS):
-    """Hash of the shared library sources (every ``.py`` and ``.toml`` of the package
-    outside ``efg/``, ``fem/`` and ``studies/``), the ``solvers`` folders, the study
-    harness and ``folders``: 16 hex digits.
+    """Hash of the shared library sources (every ``.py``, ``.toml`` and built-in mesh of
+    the package outside ``efg/``, ``fem/`` and ``studies/``), the ``solvers`` folders, the
+    study harness and ``folders``: 16 hex digits.
 
     A change to the material, the built-in cases, the harness, one of ``solvers`` or a
     study's own folder changes it; a change to another solver or to another study's folder
@@ -78,7 +78,7 @@ def source_hash(folders, solvers=_SOLVERS):
     """
     digest = hashlib.sha256()
     library = [(PACKAGE, p) for p in sorted(PACKAGE.rglob("*"))
-               if p.suffix in (".py", ".toml")
+               if p.suffix in (".py", ".toml", ".msh", ".geo")
                and (p.relative_to(PACKAGE).parts[0] not in _APART
                     or p.relative_to(PACKAGE).parts[0] in solvers)]
     own = [(Path(folder), p) for folder in (PACKAGE / "studies" / "harness", *folders)
