@@ -5,7 +5,7 @@
 :class:`~soilwater.case.model.Case` the solvers read. The pieces live in these modules:
 
 * :mod:`soilwater.case.model`: the case model, :class:`~soilwater.case.model.Case` and its
-  parts (:class:`~soilwater.case.model.Geometry`, :class:`~soilwater.case.model.TimeStepping`,
+  parts (:class:`~soilwater.case.domain.Geometry`, :class:`~soilwater.case.timeline.TimeStepping`,
   ...); the boundary conditions (:data:`~soilwater.case.boundary.EDGES`,
   :data:`~soilwater.case.boundary.KINDS`, :class:`~soilwater.case.boundary.Boundary`, ...) in
   :mod:`soilwater.case.boundary`, the node grid in :mod:`soilwater.case.grid` and the pore

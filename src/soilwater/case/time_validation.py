@@ -1,15 +1,15 @@
 """Readers of a case's ``[loading]`` and ``[time]``: the load history and the time levels,
 every time in seconds or with a unit (:func:`soilwater.case.entries.duration`).
 
-Each returns the model object (:class:`~soilwater.case.model.Loading`,
-:class:`~soilwater.case.model.TimeStepping`) or raises
+Each returns the model object (:class:`~soilwater.case.timeline.Loading`,
+:class:`~soilwater.case.timeline.TimeStepping`) or raises
 :class:`~soilwater.errors.InputError` naming the entry.
 """
 
 import numpy as np
 
 from soilwater.case.entries import check_keys, duration, integer, number, pair, string
-from soilwater.case.model import MAX_STEPS, ON_FAILURE, Loading, TimeStepping
+from soilwater.case.timeline import MAX_STEPS, ON_FAILURE, Loading, TimeStepping
 from soilwater.case.schema import GEOMETRIC, KEYS
 from soilwater.errors import require
 

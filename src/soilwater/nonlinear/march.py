@@ -110,7 +110,7 @@ def march(case, current, step, row, snapshot, stats, progress=True, desc=""):
     Notes
     -----
     A level that fails is cut into 2, 4, ... 2^MAX_CUTS equal sub-steps. A jump of the
-    load factor at the level's start (:meth:`soilwater.case.model.Loading.jump`: a step
+    load factor at the level's start (:meth:`soilwater.case.timeline.Loading.jump`: a step
     load at t = 0) is then applied in equal parts, one per sub-step, instead of all in
     the first: the step load becomes a ramp over the first level, which changes the
     drainage during that level by O(dt), the order of the time integration. A short
