@@ -31,6 +31,22 @@ def test_a_rerun_reads_the_cache(tmp_path):
     assert not changed[0].cached
 
 
+def test_the_cache_folder_is_a_setting(tmp_path, monkeypatch):
+    """SOILWATER_CACHE moves the default cache (a shared or copied folder); so does
+    ``soilwater report --cache DIR``, which sets it for its process."""
+    from soilwater.cli import main
+    from soilwater.studies.harness.paths import ROOT, cache_folder
+
+    monkeypatch.delenv("SOILWATER_CACHE", raising=False)
+    assert cache_folder() == ROOT / ".cache" / "runs"
+    monkeypatch.setenv("SOILWATER_CACHE", str(tmp_path / "shared"))
+    first = run(JOBS[:1], workers=1, progress=False)
+    assert not first[0].cached and len(list((tmp_path / "shared").glob("*.pkl"))) == 1
+    assert run(JOBS[:1], workers=1, progress=False)[0].cached
+    assert main(["report", "--cache", str(tmp_path / "other"), "--only", "nothing"]) == 2
+    assert cache_folder() == tmp_path / "other"
+
+
 def test_a_result_of_another_linear_solver_is_never_reused(tmp_path, monkeypatch):
     """The cache key holds the solver's name and version: the same job under another
     solver (or another version of it) is run, not read, and its summary names it."""

@@ -218,6 +218,8 @@ def _parser():
                    "rebuild REPORT.md from every study's last saved output")
     p.add_argument("--dask", metavar="ADDRESS", help="send the sweeps to a Dask "
                    "distributed scheduler (pip install 'soilwater[dask]')")
+    p.add_argument("--cache", metavar="DIR", help="keep the finished runs in DIR "
+                   "(default: $SOILWATER_CACHE, else .cache/runs in the checkout)")
     p.set_defaults(func=_report)
     return parser
 
@@ -333,6 +335,8 @@ def _report(args):
     from soilwater.studies.report import make_report
 
     runner.DASK["address"] = args.dask
+    if args.cache:
+        os.environ["SOILWATER_CACHE"] = args.cache
     for path in make_report(args.out, only=args.only):
         print(f"wrote {path}")
 

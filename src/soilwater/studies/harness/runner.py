@@ -33,7 +33,7 @@ from soilwater.fem.spaces import PAIRS
 from soilwater.linalg.backends import identity, linear_solver
 from soilwater.methods import EFG_METHODS, solver
 
-from soilwater.studies.harness.paths import CACHE, PACKAGE
+from soilwater.studies.harness.paths import PACKAGE, cache_folder
 #: Scheduler address for every sweep of this process (``--dask ADDRESS``), or None.
 DASK = {"address": None}
 #: Jobs run and jobs read from the cache in this process (the report states them).
@@ -93,8 +93,14 @@ SOURCES = {**{name: ("efg",) for name in EFG_METHODS}, **{name: ("fem",) for nam
 _APART = ("efg", "fem", "studies")
 
 
-def execute(job, cache_dir=CACHE):
+#: ``cache_dir`` of :func:`run` and :func:`execute` by default: the cache folder of
+#: :func:`soilwater.studies.harness.paths.cache_folder`, read when the sweep starts.
+SETTING = type("Setting", (), {"__repr__": lambda self: "the SOILWATER_CACHE setting"})()
+
+
+def execute(job, cache_dir=SETTING):
     """Run one job (or read it from the cache); never raises for a failing case."""
+    cache_dir = cache_folder() if cache_dir is SETTING else cache_dir
     tic = time.perf_counter()
     try:
         path = Path(cache_dir) / f"{job.key()}.pkl" if cache_dir else None
@@ -133,7 +139,7 @@ def _write_cache(path, result):
         pass
 
 
-def run(jobs, workers=None, dask=None, cache_dir=CACHE, progress=True, desc="sweep"):
+def run(jobs, workers=None, dask=None, cache_dir=SETTING, progress=True, desc="sweep"):
     """Execute jobs and return their outcomes in order.
 
     Parameters
@@ -145,11 +151,15 @@ def run(jobs, workers=None, dask=None, cache_dir=CACHE, progress=True, desc="swe
         Address of a Dask distributed scheduler; the same jobs go there instead
         (default: :data:`DASK`, which ``soilwater report --dask ADDRESS`` sets).
     cache_dir : path or None
-        Where results are cached (None: no cache).
+        Where results are cached (None: no cache; by default
+        :func:`soilwater.studies.harness.paths.cache_folder`, ``SOILWATER_CACHE`` or
+        ``.cache/runs``, read here so that local processes and Dask workers get the
+        folder, not the setting).
     progress : bool
         A progress bar over the jobs.
     """
     jobs, dask = list(jobs), dask or DASK["address"]
+    cache_dir = cache_folder() if cache_dir is SETTING else cache_dir
     bar = tqdm(total=len(jobs), desc=desc, unit="run", disable=not progress or None,
                leave=False)
     if dask is not None:
