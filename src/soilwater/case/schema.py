@@ -382,8 +382,8 @@ def _replaced_keys(path, value):
     if path[0] == "material" and path[-1] == "model" and len(path) <= 3:
         from soilwater.material.presets import model_keys
 
-        others = {"elastic", "original"} - {"elastic" if value == "elastic" else "original"}
-        return tuple(model_keys(others.pop()) - model_keys(value))
+        other = "original" if value == "elastic" else "elastic"
+        return tuple(model_keys(other) - model_keys(value))
     if path[0] == "time" and path[-1] == "steps":
         return GEOMETRIC
     if path[0] == "time" and path[-1] in GEOMETRIC:

@@ -15,7 +15,7 @@ in exactly one physical curve.
 import os
 import tempfile
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -114,12 +114,10 @@ class Mesh:
         """(P,) int: index into :attr:`regions` of the triangle that holds each point
         [m] (initial positions); a point on no triangle (on the boundary, to round-off)
         takes the triangle with the nearest centroid."""
-        from matplotlib.tri import Triangulation
         from scipy.spatial import cKDTree
 
         points = np.atleast_2d(np.asarray(points, float))
-        finder = Triangulation(*self.points.T, self.triangles).get_trifinder()
-        cell = np.asarray(finder(points[:, 0], points[:, 1]))
+        cell = np.asarray(_finder(self)(points[:, 0], points[:, 1]))
         lost = cell < 0
         if lost.any():
             centroids = self.points[self.triangles].mean(axis=1)
@@ -144,6 +142,15 @@ class Mesh:
 
         return Polygon(self.points[self.loop]).contains_points(points, radius=tol) | \
             Polygon(self.points[self.loop[::-1]]).contains_points(points, radius=tol)
+
+
+@lru_cache(maxsize=8)
+def _finder(mesh):
+    """matplotlib's triangle finder of ``mesh``, built once per mesh (the initial state
+    asks for regions at every step's boundary points)."""
+    from matplotlib.tri import Triangulation
+
+    return Triangulation(*mesh.points.T, mesh.triangles).get_trifinder()
 
 
 def read_mesh(path, where="geometry.mesh"):

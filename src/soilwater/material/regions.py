@@ -15,6 +15,7 @@ solids' specific gravity are the case's, common to all regions.
 """
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -44,11 +45,15 @@ class Regions(Material):
         """True when some region's model yields."""
         return any(m.plastic for m in self.materials)
 
-    @property
+    @cached_property
+    def own_keys(self):
+        """Each region's model's state keys (a tuple per region)."""
+        return tuple(tuple(m.initial_state(1)[1]) for m in self.materials)
+
+    @cached_property
     def keys(self):
         """The state keys of every region's model, and ``region``."""
-        keys = {k for m in self.materials for k in m.initial_state(1)[1]}
-        return tuple(sorted(keys)) + ("region",)
+        return tuple(sorted({k for keys in self.own_keys for k in keys})) + ("region",)
 
     def region(self, state):
         """(n,) int: each point's region, from its state."""
@@ -70,6 +75,8 @@ class Regions(Material):
     def initial_state(self, n, p=None, region=None):
         """Each region's :meth:`initial_state` at its points; ``region`` (n,) int is
         needed (the points' regions, from the mesh)."""
+        if region is None:
+            raise TypeError("Regions.initial_state needs region, the points' regions")
         region = np.asarray(region, int)
         return self.gather([m.initial_state(int(np.sum(region == r)), p)
                             for r, m in enumerate(self.materials)], region)
@@ -79,9 +86,9 @@ class Regions(Material):
         region = self.region(state)
         tangent = np.empty((len(region), 4, 4))
         parts = []
-        for r, m in enumerate(self.materials):
+        for r, (m, keys) in enumerate(zip(self.materials, self.own_keys)):
             at = region == r
-            own = {k: state[k][at] for k in m.initial_state(1)[1]}
+            own = {k: state[k][at] for k in keys}
             s, st, C = m.update(stress[at], own, dstrain[at], dspin[at])
             tangent[at] = C
             parts.append((s, st))
@@ -92,10 +99,10 @@ class Regions(Material):
         """Each region's :meth:`admissible` on its own points."""
         region = self.region(state)
         parts = []
-        for r, m in enumerate(self.materials):
+        for r, (m, keys) in enumerate(zip(self.materials, self.own_keys)):
             at = region == r
-            parts.append((stress[at], m.admissible(stress[at], {
-                k: state[k][at] for k in m.initial_state(1)[1]})))
+            parts.append((stress[at], m.admissible(stress[at],
+                                                   {k: state[k][at] for k in keys})))
         return self.gather(parts, region)[1]
 
     def k0_nc(self):
