@@ -67,3 +67,15 @@ def test_summary_reads_how_far_each_run_got():
     assert np.isnan(rows.loc["b", "crest_built"]) and rows.loc["b", "fill"] == 8.0
     assert rows.loc["b", "stopped"] == "an element inverts (J = -3)"
     assert rows.loc["b", "min_angle"] == 10.0 and rows.loc["a", "excess_max"] == 120.0
+
+
+def test_the_verdict_rows_a_reach_beyond_fem_supported_and_short_of_it_refuted():
+    from soilwater.studies.verdicts import embankment
+
+    def summary(efg, fem):
+        return pd.DataFrame({"method": ["efg", "fem-th"], "fill": [efg, fem],
+                             "stopped": ["-", "an element inverts (J = -1)"]})
+
+    assert "| supported |" in embankment(summary(10.0, 8.0))
+    assert "| refuted |" in embankment(summary(7.3, 8.0))
+    assert "| open |" in embankment(summary(8.0, 8.0))

@@ -6,7 +6,7 @@ from soilwater.studies.stability.findings import pair
 
 #: The studies whose saved data the verdicts read.
 NEEDS = ("verification", "uniqueness", "stability", "consolidation", "footing",
-         "footing-fair")
+         "footing-fair", "embankment")
 
 
 def section(data):
@@ -23,7 +23,8 @@ def section(data):
                   s["column stability"], s["table2"],
                   c["efg consolidation"].set_index(["method", "case", "metric"]).value,
                   c["fem terzaghi"].set_index(["method", "steps"]),
-                  data["footing"]["verdict"], data["footing-fair"]["verdict"])
+                  data["footing"]["verdict"], data["footing-fair"]["verdict"]) + [
+        embankment(data["embankment"]["summary"]), ""]
 
 
 def claims(uc, bif, fits, col, t2, ec, ft, foot, fair):
@@ -96,8 +97,23 @@ def claims(uc, bif, fits, col, t2, ec, ft, foot, fair):
         "(introduction): at equal vertices | " + " | ".join(foot) + " |",
         "| ... at equal displacement unknowns and at equal run time, smooth and rough | "
         + " | ".join(fair) + " |",
-        "",
     ]
+
+
+def embankment(summary):
+    """The large-deformation claim's row on a user's geometry: the embankment, every
+    method on the same gmsh mesh, raised until it can go no further. Supported if an EFG
+    configuration reaches a greater fill than every FEM pair, refuted if a FEM pair
+    reaches a greater fill than every EFG configuration, else open."""
+    rows = summary.set_index("method")
+    efg = rows[rows.index.str.startswith("efg")].fill.max()
+    fem = rows[rows.index.str.startswith("fem")].fill.max()
+    verdict = ("supported" if efg > fem + 0.05 else "refuted" if fem > efg + 0.05
+               else "open")
+    return ("| ... on a user's geometry: the embankment on soft clay (same gmsh mesh, "
+            "fill raised until a method stops) | " + verdict + " | fill reached: "
+            + ", ".join(f"{m} {r.fill:.1f} m ({'to the end' if r.stopped == '-' else r.stopped})"
+                        for m, r in rows.iterrows()) + " |")
 
 
 def _recommended_infsup(fits):
