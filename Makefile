@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: test docs report bench clean
+.PHONY: test docs report report-quick bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -24,6 +24,11 @@ docs: $(STAMP)
 report: $(STAMP)
 	$(BIN)/python -m pip install --quiet -e '.[fast]'
 	$(BIN)/soilwater report
+
+# A first look: every study coarser, into reports-quick/ (never over reports/).
+report-quick: $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[fast]'
+	$(BIN)/soilwater report --quick
 
 # The benchmark adds the optional PARDISO solver (x86_64; SuperLU elsewhere). OpenBLAS
 # reads OPENBLAS_CORETYPE and OPENBLAS_L2_SIZE when NumPy loads it, so they are unset for

@@ -9,6 +9,7 @@ import copy
 
 import numpy as np
 import pytest
+from matplotlib.figure import Figure
 from PIL import Image
 
 from soilwater.studies.footing import gif, pictures, pictures_report
@@ -99,12 +100,12 @@ def test_a_failing_writer_leaves_nothing(tiny, tmp_path, monkeypatch):
 
     earlier = tmp_path / "deformed.png"
     earlier.write_bytes(b"earlier")
-    original_save = pictures.plt.Figure.savefig
+    original_save = Figure.savefig
 
     def save_then_fail(self, *args, **kwargs):
         original_save(self, *args, **kwargs)
         raise OSError("disk full")
-    monkeypatch.setattr(pictures.plt.Figure, "savefig", save_then_fail)
+    monkeypatch.setattr(Figure, "savefig", save_then_fail)
     with pytest.raises(OSError, match="disk full"):
         pictures.deformed_figure(tiny, earlier)
     assert list(tmp_path.iterdir()) == [earlier]

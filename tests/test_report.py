@@ -228,3 +228,51 @@ def test_a_section_older_code_saved_asks_for_a_rerun_and_todays_errors_raise():
     assert _readable(lambda: ["ok"], False, "## x", "x", "x") == ["ok"]
     with pytest.raises(KeyError):
         _readable(broken, True, "## footing", "section `footing`", "footing")
+
+
+def test_a_quick_report_is_labelled_and_never_mixed_with_a_full_one(fake, tmp_path,
+                                                                   monkeypatch):
+    """``SOILWATER_QUICK=1`` (``soilwater report --quick``) labels the page and each
+    section; a folder holding one resolution's studies refuses the other's, in one line,
+    without writing anything."""
+    from soilwater.studies.harness.quick import LABEL, VARIABLE
+
+    report.make_report(fake)
+    full = (fake / "REPORT.md").read_text()
+    monkeypatch.setenv(VARIABLE, "1")
+    with pytest.raises(SoilwaterError, match="holds a full report") as err:
+        report.make_report(fake)
+    assert "\n" not in str(err.value) and "reports-quick" in str(err.value)
+    assert (fake / "REPORT.md").read_text() == full and len(runs("alpha")) == 1
+    quick = tmp_path / "quick"
+    report.make_report(quick)
+    text = (quick / "REPORT.md").read_text()
+    assert text.startswith("# soilwater report (quick)")
+    assert text.count(LABEL) == 1 + len(registry.STUDIES)
+    assert store.load(quick, "alpha").meta["settings"]["quick"] is True
+    monkeypatch.delenv(VARIABLE)
+    with pytest.raises(SoilwaterError, match="holds a quick report"):
+        report.make_report(quick)
+    assert LABEL not in full
+
+
+def test_redraw_draws_the_figures_from_the_saved_output_and_runs_nothing(fake):
+    report.make_report(fake)
+    module = sys.modules["fake_alpha.report"]
+    drawn = []
+    module.figures = lambda root, data: drawn.append((root, data["value"]))
+    report.make_report(fake, redraw=True)
+    assert drawn == [(fake, 1)] and len(runs("alpha")) == len(runs("beta")) == 1
+    assert "alpha value 1" in (fake / "REPORT.md").read_text()
+
+
+def test_the_report_says_which_study_runs_and_the_time_left_in_plain_lines(fake, capsys):
+    report.make_report(fake)
+    err = capsys.readouterr().err.splitlines()
+    assert err[0] == "report: study 1/2 alpha; 2 studies never made here"
+    report.make_report(fake)
+    seconds = store.load(fake, "alpha").meta["seconds"] + store.load(fake, "beta").meta[
+        "seconds"]
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith("report: study 1/2 alpha; about ")
+    assert err[0].endswith(" left by their last runs") and f"{round(seconds)} s" in err[0]

@@ -99,3 +99,33 @@ def test_a_change_to_one_solver_keeps_the_other_solvers_runs(tmp_path, monkeypat
     (tmp_path / "studies" / "a.py").write_text("# a study, edited\n")
     assert keys() == third
     runner.code_version.cache_clear()
+
+
+def test_a_sweep_says_what_is_cached_to_run_and_done_and_the_time_left(tmp_path, capsys):
+    """Without a terminal: a line when it starts, as it goes and when it ends; the time
+    left comes from the run times recorded in the cache folder, which outlive the
+    cached results."""
+    import json
+
+    from soilwater.studies.harness.progress import TIMES, signature
+
+    run(JOBS, workers=1, cache_dir=tmp_path, progress=True, desc="column")
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0] == ("column: 2 runs: 0 cached, 2 to run, time left unknown "
+                        "(2 runs never timed here)")
+    assert lines[-1].startswith("column: 2/2 done, ") and lines[-1].endswith("nothing to run")
+    times = json.loads((tmp_path / TIMES).read_text())
+    assert set(times) == {signature(job) for job in JOBS}
+    assert all(seconds > 0 for seconds in times.values())
+    run(JOBS, workers=1, cache_dir=tmp_path, progress=True, desc="column")
+    assert capsys.readouterr().err.splitlines()[0] == ("column: 2 runs: 2 cached, 0 to run, "
+                                                       "nothing to run")
+    for path in tmp_path.glob("*.pkl"):
+        path.unlink()
+    (tmp_path / TIMES).write_text(json.dumps({signature(JOBS[0]): 100.0,
+                                              signature(JOBS[1]): 140.0}))
+    run(JOBS, workers=2, cache_dir=tmp_path, progress=True, desc="column")
+    assert capsys.readouterr().err.splitlines()[0] == ("column: 2 runs: 0 cached, 2 to run, "
+                                                       "about 2 min 0 s left")
+    run(JOBS, workers=1, cache_dir=tmp_path, progress=False)
+    assert capsys.readouterr().err == ""

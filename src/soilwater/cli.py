@@ -213,7 +213,13 @@ def _parser():
     p.set_defaults(func=_bench)
 
     p = sub.add_parser("report", help="regenerate every figure and table under reports/")
-    p.add_argument("--out", default="reports", help="report folder (default reports)")
+    p.add_argument("--out", help="report folder (default reports; reports-quick with "
+                   "--quick)")
+    p.add_argument("--quick", action="store_true", help="every study at a coarser "
+                   "resolution, a first look in about 15 minutes, labelled quick, into its "
+                   "own folder")
+    p.add_argument("--redraw", action="store_true", help="run nothing: redraw the figures "
+                   "from the studies' saved outputs and rebuild REPORT.md")
     p.add_argument("--only", metavar="STUDY[,STUDY]", help="rerun only these studies and "
                    "rebuild REPORT.md from every study's last saved output")
     p.add_argument("--dask", metavar="ADDRESS", help="send the sweeps to a Dask "
@@ -331,13 +337,16 @@ def _bench(args):
 
 
 def _report(args):
+    if args.quick:                      # before any study is imported: it picks its sizes
+        os.environ["SOILWATER_QUICK"] = "1"
     from soilwater.studies.harness import runner
-    from soilwater.studies.report import make_report
+    from soilwater.studies.report import QUICK_FOLDER, make_report
 
     runner.DASK["address"] = args.dask
     if args.cache:
         os.environ["SOILWATER_CACHE"] = args.cache
-    for path in make_report(args.out, only=args.only):
+    out = args.out or (QUICK_FOLDER if args.quick else "reports")
+    for path in make_report(out, only=args.only, redraw=args.redraw):
         print(f"wrote {path}")
 
 

@@ -9,14 +9,21 @@ since; a study never run says so in place of its section.
 """
 
 import os
+import sys
 from pathlib import Path
 
 from tqdm import tqdm
 
 from soilwater.errors import SoilwaterError
+from soilwater.nonlinear.progress import _isatty, clock
 from soilwater.studies import registry, verdicts
+from soilwater.studies.harness import quick as _quick
 from soilwater.studies.harness import runner
 from soilwater.studies.harness import study as store
+
+
+#: The folder of ``soilwater report --quick`` by default (never ``reports/``).
+QUICK_FOLDER = "reports-quick"
 
 
 def select(only):
@@ -38,15 +45,33 @@ def select(only):
     return [name for name in registry.STUDIES if name in names]
 
 
-def make_report(root="reports", only=None):
+def make_report(root="reports", only=None, redraw=False):
     """Run the studies (all, or ``only``: ``"NAME[,NAME]"``) into ``root`` and write
     ``root/REPORT.md`` from every study's last saved output; returns the paths of the
     saved outputs and REPORT.md.
 
+    Parameters
+    ----------
+    root : path
+        The report's folder.
+    only : str, optional
+        ``"NAME[,NAME]"``: run these studies only.
+    redraw : bool
+        Run no study: redraw the figures of the selected studies from their saved outputs
+        (those whose report module has ``figures(root, data)``) and rebuild REPORT.md.
+
     Raises
     ------
     SoilwaterError
-        For an unknown study, or a study whose needed study has no saved output.
+        For an unknown study, a study whose needed study has no saved output, or a folder
+        holding the other resolution's report.
+
+    Notes
+    -----
+    In a process started with ``SOILWATER_QUICK=1`` (``soilwater report --quick``)
+    every study is made at its quick resolution (:mod:`soilwater.studies.harness.quick`)
+    and each page and figure is labelled so; ``root`` must then not hold a full report,
+    nor a full report's ``root`` a quick one.
     """
     import matplotlib
 
@@ -56,11 +81,20 @@ def make_report(root="reports", only=None):
     for sub in ("tables", "figures"):
         (root / sub).mkdir(parents=True, exist_ok=True)
     studies = registry.STUDIES
+    quick = _quick.active()
     settings = {"linear_solver": _linear_solver(), "dask": runner.DASK["address"],
-                "cores": os.cpu_count()}
+                "cores": os.cpu_count(), "quick": quick}
     saved = {name: store.load(root, name) for name in studies}
-    for name in (bar := tqdm(names, desc="report", unit="study")):
-        bar.set_postfix_str(name)
+    _same_resolution(root, saved, quick)
+    if redraw:
+        names = [n for n in names if saved[n] is not None
+                 and hasattr(studies[n].load(), "figures")]
+        for name in names:
+            studies[name].load().figures(root, saved[name].data)
+        names = []
+    plan = Plan(names, saved)
+    for name in names:
+        plan.start(name)
         study = studies[name]
         missing = [n for n in study.needs if saved[n] is None]
         if missing:
@@ -68,10 +102,61 @@ def make_report(root="reports", only=None):
                                  f"run soilwater report --only {','.join(missing)},{name}")
         saved[name] = store.run(study, root, {n: saved[n].data for n in study.needs},
                                 studies, settings)
+    plan.close()
     text = markdown(saved, {name: store.inputs_hash(s, studies, store.solvers(saved[name]))
-                            for name, s in studies.items() if saved[name] is not None})
+                            for name, s in studies.items() if saved[name] is not None},
+                    quick)
     (root / "REPORT.md").write_text(text)
     return [p for name in names for p in store.paths(root, name)] + [root / "REPORT.md"]
+
+
+def _same_resolution(root, saved, quick):
+    """Refuse a folder holding saved studies of the other resolution (a quick report
+    never writes over a full one, nor the reverse)."""
+    other = [n for n, s in saved.items()
+             if s is not None and bool(s.meta["settings"].get("quick")) != bool(quick)]
+    if other:
+        held, flag = ("a full", "--quick") if quick else ("a quick", "")
+        raise SoilwaterError(
+            f"{root} holds {held} report ({', '.join(other)}): write "
+            + (f"the quick one elsewhere ({flag} --out DIR; default {QUICK_FOLDER})"
+               if quick else "the full one elsewhere (--out DIR; default reports)"))
+
+
+class Plan:
+    """The report's progress over its studies: which is being made and the time left by
+    each study's last recorded wall time (a terminal gets a bar, anything else a line per
+    study)."""
+
+    def __init__(self, names, saved):
+        self.names, self.done = list(names), 0
+        self.seconds = {n: saved[n].meta["seconds"] if saved[n] is not None else None
+                        for n in names}
+        self.bar = tqdm(total=len(names), desc="report", unit="study",
+                        disable=not _isatty(sys.stderr) or None) if names else None
+
+    def start(self, name):
+        """Study ``name`` begins."""
+        runner.PROGRESS.update(show=True, desc=name)
+        left = [self.seconds[n] for n in self.names[self.done:]]
+        known = sum(s for s in left if s is not None)
+        unknown = sum(s is None for s in left)
+        eta = (f"about {clock(known)} left by their last runs"
+               if unknown < len(left) else "")
+        eta += (f"{' + ' if eta else ''}{unknown} {'study' if unknown == 1 else 'studies'} never made here" if unknown else "")
+        self.done += 1
+        if self.bar is None or self.bar.disable:
+            print(f"report: study {self.done}/{len(self.names)} {name}; {eta}",
+                  file=sys.stderr, flush=True)
+        else:
+            self.bar.set_postfix_str(f"{name}; {eta}")
+            self.bar.update(0 if self.done == 1 else 1)
+
+    def close(self):
+        runner.PROGRESS.update(show=False, desc="sweep")
+        if self.bar is not None:
+            self.bar.update(1)
+            self.bar.close()
 
 
 def _linear_solver():
@@ -93,11 +178,17 @@ def provenance(name, saved, today):
             f"{solvers}, its study) on {meta['made']} in {meta['seconds']:.0f} s.*")
 
 
-def markdown(saved, hashes):
+def markdown(saved, hashes, quick=False):
     """REPORT.md from the saved outputs (name -> :class:`~soilwater.studies.harness.
     study.Saved` or None) and today's source hashes of the saved ones (name -> hash over
-    the solvers each used)."""
+    the solvers each used); ``quick``: a quick report's, labelled so at its top and under
+    each section."""
     lines = _header(saved)
+    if quick:
+        lines[0] += " (quick)"
+        lines[1:1] = ["", f"**{_quick.LABEL}.** Its numbers come from coarser runs than "
+                      "the full report states: read them as a first look, not as the "
+                      "report's findings."]
     for name, study in registry.STUDIES.items():
         if saved[name] is None:
             lines += [f"## {name}", "", f"*Study `{name}` has not been run yet: "
@@ -107,6 +198,8 @@ def markdown(saved, hashes):
         lines += [*_readable(lambda: study.load().section(saved[name].data), fresh,
                              f"## {name}", f"section `{name}`", name),
                   provenance(name, saved[name], hashes[name]), ""]
+        if quick:
+            lines[-1:-1] = [f"*{_quick.LABEL}.*"]
     stale = [n for n in verdicts.NEEDS
              if saved.get(n) is not None and saved[n].meta["code"] != hashes[n]]
     lines += _readable(

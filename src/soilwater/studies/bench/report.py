@@ -16,6 +16,7 @@ from soilwater.studies.bench.plan import (BOTH_FROM, KRYLOV_FROM, LARGE_FROM, LA
                                           LARGE_METHODS, LARGE_TIME_LIMIT, METHODS, SCHEMES,
                                           TIME_LIMIT, direct)
 from soilwater.studies.bench.runs import COUNTS, PHASES
+from soilwater.studies.harness import figures
 from soilwater.studies.harness.machine import cpu, ram_gb
 
 
@@ -85,8 +86,7 @@ def figure(table, path):
                        label="stopped at its limit (step)")]
     axes[0, 0].legend(handles=handles, fontsize=7)
     fig.suptitle("One step of unconfined compression (0.2 % strain): phase times")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    figures.save(fig, path, dpi=120)
 
 
 def write(path, table, shapes, growth, phases, scale, yardstick, tic):

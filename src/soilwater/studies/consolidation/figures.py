@@ -4,6 +4,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from soilwater.studies.consolidation.study import mandel_centre
+from soilwater.studies.harness import figures
 
 
 def consolidation(terzaghi_table, mandel_table, path, times=(0.1, 0.5, 1.0, 3.0)):
@@ -48,6 +49,4 @@ def consolidation(terzaghi_table, mandel_table, path, times=(0.1, 0.5, 1.0, 3.0)
     right.legend(fontsize=8)
     for ax in (left, right):
         ax.grid(alpha=0.3, which="both")
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
+    return figures.save(fig, path)

@@ -19,9 +19,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from soilwater.studies.harness import tables
+from soilwater.studies.harness import figures, tables
 from soilwater.studies.footing.study import FROM
-from soilwater.studies.harness.footing import CASE, width
+from soilwater.studies.harness.footing import CASE, time_steps, width
+from soilwater.studies.harness.quick import pick
 from soilwater.studies.harness.grids import growing, refined
 from soilwater.studies.harness.runs import solved
 from soilwater.references.closed_forms import (PRANDTL, flamant_settlement, undrained_poisson,
@@ -30,7 +31,9 @@ from soilwater.material.driver import run_test
 from soilwater.case.loader import load_case
 
 #: Sides of the square domains [B].
-DOMAINS = (5, 10, 20, 40)
+DOMAINS = pick((5, 10, 20, 40), (5, 10, 20))
+#: Spacings per B at the footing (:func:`soilwater.studies.harness.grids.growing`).
+CORE = pick(8, 4)
 METHOD = "fem-th"
 #: Pressures (over Prandtl's) at which the shift between successive domains is measured.
 LEVELS = (0.5, 1.0)
@@ -53,7 +56,8 @@ def curves(domains=DOMAINS, method=METHOD):
     B = width(case)
     frames = []
     for domain, result in zip(domains, solved(
-            [(CASE, growing(domain * B), method) for domain in domains])):
+            [(CASE, (*growing(domain * B, CORE), f"time.steps={time_steps(case)}"), method)
+             for domain in domains])):
         h, d = result.history, result.case.discretisation
         s, p = h["settlement@footing"].to_numpy() / B, h["pressure@footing"].to_numpy()
         frames.append(pd.DataFrame({
@@ -147,9 +151,7 @@ def figure(table, path):
         ax.axhline(1.0, color="k", lw=1, label="Prandtl (2 + pi) s_u")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
+    return figures.save(fig, path)
 
 
 def _enough(summary, limit=0.02):

@@ -1,6 +1,7 @@
 """Animations of the strip-footing runs: one GIF per method, its deformation snapshot by
 snapshot coloured by eps_s (:class:`soilwater.studies.footing.view.RunView`), written whole
-or not at all (:func:`soilwater.studies.footing.pictures.written`).
+or not at all (:func:`soilwater.studies.harness.figures.written`), labelled as a quick
+report when one is being made (:func:`soilwater.studies.harness.figures.stamp`).
 """
 
 from pathlib import Path
@@ -9,8 +10,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.animation import PillowWriter
 
-from soilwater.studies.footing.pictures import written
-from soilwater.studies.footing.view import STRAIN_LABEL, RunView, strain_norm, window_top
+from soilwater.studies.footing.view import (STRAIN_LABEL, RunView, strain_extend, strain_norm,
+                                            window_top)
+from soilwater.studies.harness import figures
 
 #: Most frames of an animation, and its frame rate [1/s].
 FRAMES = 50
@@ -50,16 +52,21 @@ def animation(result, path, norm=None, top=None, most=FRAMES):
     Path
     """
     run = RunView(result)
-    fig, ax = plt.subplots(figsize=(5.6, 5.0), constrained_layout=True)
-    mappable, show = run.strain_view(ax, norm or strain_norm([run]))
-    run.window(ax, top or window_top([run]))
-    fig.colorbar(mappable, ax=ax, shrink=0.9, label=STRAIN_LABEL)
-    title = ax.set_title(" ", fontsize=9)
+    with figures.style():
+        fig, ax = plt.subplots(figsize=(5.6, 5.0), constrained_layout=True)
+        norm = norm or strain_norm([run])
+        mappable, show = run.strain_view(ax, norm)
+        run.window(ax, top or window_top([run]))
+        ax.grid(False)
+        fig.colorbar(mappable, ax=ax, shrink=0.9, label=STRAIN_LABEL,
+                     extend=strain_extend([run], norm))
+        title = ax.set_title(" ", fontsize=9)
+        figures.stamp(fig)
     fig.canvas.draw()
     fig.set_layout_engine("none")  # the first frame's layout holds for all
     writer = PillowWriter(fps=FPS)
     try:
-        with written(path) as tmp, writer.saving(fig, tmp, dpi=90):
+        with figures.written(path) as tmp, writer.saving(fig, tmp, dpi=90):
             for k in frames(len(result.snapshots), most):
                 show(k)
                 s, p = run.loads(k)
@@ -80,6 +87,6 @@ def animations(results, folder):
     """
     runs = [RunView(r) for r in results]
     norm, top = strain_norm(runs), window_top(runs)
-    return [animation(r, Path(folder) / f"footing_{r.method}.gif", norm, top)
-            for r in results]
+    return [animation(r.result, Path(folder) / f"footing_{r.label}.gif", norm, top)
+            for r in runs]
 

@@ -6,29 +6,30 @@ Every picture is drawn from :class:`soilwater.results.Result` objects of the bui
 ``strip-footing`` case (or a variant with one footing segment on the top edge), from the
 node positions and nodal fields of their snapshots; the shear strain is
 :mod:`soilwater.studies.harness.deformation`'s ``eps_s`` on a triangulation of the initial
-nodes. The views show the window of :mod:`soilwater.studies.footing.view`. Files are
-written whole or not at all (:func:`written`: a temporary file renamed into place).
+nodes. The views show the window of :mod:`soilwater.studies.footing.view`, every run
+drawn alike on triangles. Files are written whole or not at all
+(:func:`soilwater.studies.harness.figures.save`).
 """
 
-import os
-import tempfile
 import textwrap
-from contextlib import contextmanager
-from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from matplotlib.colors import Normalize
+from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
 from matplotlib.tri import Triangulation
 
-from soilwater.studies.harness import deformation
+from soilwater.studies.harness import deformation, figures
 from soilwater.studies.footing.study import DENSITIES
-from soilwater.studies.footing.view import STRAIN_LABEL, RunView, strain_norm, window_top
-from soilwater.studies.harness.footing import CASE, PLAIN
+from soilwater.studies.footing.view import (CMAP, STRAIN_LABEL, STRAIN_PERCENTILE, RunView,
+                                            final_strains, strain_extend, strain_norm,
+                                            window_top)
+from soilwater.studies.harness.footing import CASE, PLAIN, time_steps
 from soilwater.studies.harness.grids import refined
 from soilwater.studies.harness.runs import solved
+from soilwater.case.loader import load_case
 from soilwater.geometry.quality import DISTORTED
 
 #: Spacings per B at the footing of the runs the report draws: the built-in case's.
@@ -53,53 +54,38 @@ def runs(core=CORE, methods=PLAIN):
     -------
     list of soilwater.results.Result
     """
-    return solved([(CASE, (*refined(core), *extra), method)
+    steps = f"time.steps={time_steps(load_case(CASE))}"
+    return solved([(CASE, (*refined(core), *extra, steps), method)
                    for method, extra in methods.values()])
 
 
-@contextmanager
-def written(path):
-    """A temporary path beside ``path`` (same suffix), renamed to ``path`` when the
-    block succeeds and removed when it fails."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.",
-                               suffix=path.suffix)
-    os.close(fd)
-    try:
-        yield tmp
-        os.chmod(tmp, 0o644)  # mkstemp's 0o600 is for the temporary name only
-        os.replace(tmp, path)
-    finally:
-        Path(tmp).unlink(missing_ok=True)
-
-
 def _panels(count, title):
-    """A figure of ``count`` panels side by side under ``title`` (wrapped to fit)."""
-    size = 3.7 * count + 1.1
-    fig, axes = plt.subplots(1, count, figsize=(size, 5.1), sharey=True,
-                             layout="compressed", squeeze=False)
-    fig.suptitle(textwrap.fill(title, int(12 * size)), fontsize=11)
+    """A slide (:func:`soilwater.studies.harness.figures.slide`) of ``count`` panels side
+    by side sharing their axes, under ``title`` (wrapped to fit)."""
+    fig, axes = figures.slide(1, count, sharex=True, sharey=True, squeeze=False)
+    fig.suptitle(textwrap.fill(title, 110))
     return fig, axes[0]
 
 
-def _save(fig, path):
-    try:
-        with written(path) as tmp:
-            fig.savefig(tmp, dpi=150)
-    finally:
-        plt.close(fig)
-    return Path(path)
+def _bare(axes):
+    """Leave the axis labels to the outer panels (the panels share their axes)."""
+    for ax in axes[1:]:
+        ax.set_ylabel("")
 
 
 def deformed_figure(results, path):
-    """``path`` (PNG): each run's final level side by side, coloured by eps_s on one
-    scale (EFG nodes, FEM elements with the distorted ones outlined), the footing drawn.
+    """``path`` (PNG): each run's final level side by side, every triangle coloured by
+    its eps_s on one linear scale (EFG and FEM alike: the Delaunay triangles of EFG's
+    initial nodes, FEM's elements; the scale of :func:`~soilwater.studies.footing.view.
+    strain_norm`, larger values in the top colour, said in the legend and marked by the
+    colour bar's arrow), the distorted triangles outlined, the footing drawn;
+    each panel's title gives the settlement, pressure and the counts of distorted and
+    inverted triangles, the legend below says what the outlines mean.
 
     Parameters
     ----------
     results : list of soilwater.results.Result
-        Strip-footing runs (EFG: point cloud, FEM: snapshots with cells).
+        Strip-footing runs.
     path : str or Path
 
     Returns
@@ -108,24 +94,32 @@ def deformed_figure(results, path):
     """
     runs = [RunView(r) for r in results]
     norm, top = strain_norm(runs), window_top(runs)
-    fig, axes = _panels(len(runs), "Strip footing at its last level: EFG nodes and FEM "
-                        "elements coloured by shear strain")
-    for ax, run in zip(axes, runs):
-        mappable, show = run.strain_view(ax, norm)
-        counts = show(run.final)
-        run.window(ax, top)
-        s, p = run.loads(run.final)
-        ax.set_title(f"{run.label}\nsettlement {s / run.B:.2f} B, pressure {p:.3g} kPa",
-                     fontsize=10)
-        if counts is not None:
-            ax.text(0.97, 0.03, f"red: smallest angle < {DISTORTED:.2g} of its start, "
-                    f"{counts[0]} elements\nmagenta: inverted, {counts[1]}",
-                    transform=ax.transAxes, ha="right", va="bottom", fontsize=8,
-                    bbox={"facecolor": "white", "alpha": 0.85, "edgecolor": "none"})
-    for ax in axes[1:]:
-        ax.set_ylabel("")
-    fig.colorbar(mappable, ax=axes.tolist(), shrink=0.8, label=STRAIN_LABEL)
-    return _save(fig, path)
+    with figures.style():
+        fig, axes = _panels(len(runs), "Strip footing at its last level: EFG and FEM alike, "
+                            "each triangle of the initial nodes coloured by its shear strain")
+        for ax, run in zip(axes, runs):
+            mappable, show = run.strain_view(ax, norm)
+            distorted, inverted = show(run.final)
+            run.window(ax, top)
+            s, p = run.loads(run.final)
+            ax.set_title(f"{run.label}\nsettlement {s / run.B:.2f} B, {p:.3g} kPa\n"
+                         f"{distorted} distorted, {inverted} inverted", fontsize=12)
+            ax.grid(False)
+        _bare(axes)
+        fig.colorbar(mappable, ax=axes.tolist(), shrink=0.8, label=STRAIN_LABEL,
+                     extend=strain_extend(runs, norm))
+        top_note = (f"colours end at {norm.vmax:.2g}, percentile {STRAIN_PERCENTILE:g} in "
+                    f"view; the largest, {final_strains(runs).max():.2g}, in the top "
+                    "colour (arrow)")
+        fig.legend(handles=[
+            Patch(facecolor="none", edgecolor="red", lw=1.5,
+                  label=f"distorted: smallest angle below {DISTORTED:.2g} of its initial "
+                        "value"),
+            Patch(facecolor="magenta", label="inverted (turned inside out)"),
+            Patch(facecolor="0.35", edgecolor="k", label="rigid footing"),
+            Patch(facecolor=plt.get_cmap(CMAP)(1.0), label=top_note)],
+            loc="outside lower center", ncol=2)
+        return figures.save(fig, path)
 
 
 def _pressure_levels(runs, fields):
@@ -153,22 +147,26 @@ def pore_pressure_figure(results, path):
     fields = [run.excess_pressure(run.final) for run in runs]
     levels, norm = _pressure_levels(runs, fields)
     top = window_top(runs)
-    fig, axes = _panels(len(runs), "Strip footing at its last level: excess pore "
-                        "pressure on the deformed configuration (levels: percentiles "
-                        "{:g} to {:g} in view)".format(*LEVEL_PERCENTILES))
-    for ax, run, field in zip(axes, runs, fields):
-        points = run.result.snapshots[run.final].points
-        filled = ax.tricontourf(Triangulation(*points.T, run.triangles), field,
-                                levels=levels, cmap="RdBu_r", norm=norm, extend="both")
-        run.footing(ax, run.final)
-        run.window(ax, top)
-        seen = field[run.in_view(points)]
-        ax.set_title(f"{run.label}, settlement {run.loads(run.final)[0] / run.B:.2f} B\n"
-                     f"in view {seen.min():.3g} to {seen.max():.3g} kPa", fontsize=10)
-    for ax in axes[1:]:
-        ax.set_ylabel("")
-    fig.colorbar(filled, ax=axes.tolist(), shrink=0.8, label=PRESSURE_LABEL)
-    return _save(fig, path)
+    with figures.style():
+        fig, axes = _panels(len(runs), "Strip footing at its last level: excess pore "
+                            "pressure on the deformed configuration (colours span "
+                            "percentiles {:g} to {:g} in view; beyond, the end "
+                            "colours)".format(*LEVEL_PERCENTILES))
+        for ax, run, field in zip(axes, runs, fields):
+            points = run.result.snapshots[run.final].points
+            filled = ax.tricontourf(Triangulation(*points.T, run.triangles), field,
+                                    levels=levels, cmap=figures.DIVERGING, norm=norm,
+                                    extend="both")
+            run.footing(ax, run.final)
+            run.window(ax, top)
+            ax.grid(False)
+            seen = field[run.in_view(points)]
+            ax.set_title(f"{run.label}, settlement {run.loads(run.final)[0] / run.B:.2f} "
+                         f"B\nin view {seen.min():.3g} to {seen.max():.3g} kPa",
+                         fontsize=12)
+        _bare(axes)
+        fig.colorbar(filled, ax=axes.tolist(), shrink=0.8, label=PRESSURE_LABEL)
+        return figures.save(fig, path)
 
 
 def measures(results):
@@ -180,10 +178,11 @@ def measures(results):
         One row per run: ``method``, ``nodes``, ``reached`` (last settlement over B),
         ``eps_s_edge`` (largest triangle eps_s at the last level within
         :data:`EDGE_RADIUS` B of the footing's edge, by initial centroid),
-        ``distorted`` and ``inverted`` (FEM elements at the last level with a smallest
-        angle below :data:`soilwater.geometry.quality.DISTORTED` of its undeformed value / not above
-        0; empty for EFG), ``dp_min``, ``dp_max`` (excess pore pressure in view at the
-        last level [kPa], compression positive).
+        ``distorted`` and ``inverted`` (triangles at the last level with a smallest
+        angle below :data:`soilwater.geometry.quality.DISTORTED` of its undeformed value /
+        not above 0: FEM's elements, EFG's Delaunay triangles of its initial nodes),
+        ``dp_min``, ``dp_max`` (excess pore pressure in view at the last level [kPa],
+        compression positive).
     """
     rows = []
     for run in map(RunView, results):
@@ -192,14 +191,11 @@ def measures(results):
                 <= EDGE_RADIUS * run.B)
         last = run.result.snapshots[run.final].points
         seen = run.excess_pressure(run.final)[run.in_view(last)]
-        row = {"method": run.label, "nodes": len(run.initial),
-               "reached": run.loads(run.final)[0] / run.B,
-               "eps_s_edge": float(np.nanmax(run.strain(run.final)[near])),
-               "distorted": "", "inverted": "",
-               "dp_min": float(seen.min()), "dp_max": float(seen.max())}
-        if not run.cloud:
-            last = deformation.smallest_angles(run.result.snapshots[-1:], run.triangles)[0]
-            row.update(distorted=int((last < DISTORTED * run.angle0).sum()),
-                       inverted=int((last <= 0).sum()))
-        rows.append(row)
+        angles = deformation.smallest_angles(run.result.snapshots[-1:], run.triangles)[0]
+        rows.append({"method": run.label, "nodes": len(run.initial),
+                     "reached": run.loads(run.final)[0] / run.B,
+                     "eps_s_edge": float(np.nanmax(run.strain(run.final)[near])),
+                     "distorted": int((angles < DISTORTED * run.angle0).sum()),
+                     "inverted": int((angles <= 0).sum()),
+                     "dp_min": float(seen.min()), "dp_max": float(seen.max())})
     return pd.DataFrame(rows)

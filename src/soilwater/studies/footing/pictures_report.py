@@ -9,7 +9,7 @@ from soilwater.studies.footing.gif import animations, frames
 from soilwater.studies.footing.pictures import (EDGE_RADIUS, LEVEL_PERCENTILES,
                                                 deformed_figure, measures,
                                                 pore_pressure_figure, runs)
-from soilwater.studies.footing.view import ZOOM
+from soilwater.studies.footing.view import STRAIN_PERCENTILE, ZOOM, RunView
 from soilwater.studies.harness import tables
 
 NAME = "footing-pictures"
@@ -25,7 +25,7 @@ def run(root, inputs):
 def section(data):
     """The report's lines on the pictures from :func:`write`'s data."""
     table = data["footing deformation"]
-    fem = table[table.distorted != ""]
+    counted = table[table.distorted != ""]      # outputs saved before EFG was counted
     nx, ny = data["grid"]
     snapshots = data["snapshots"]
     gifs = " ".join(f"![{m}](figures/footing_{m}.gif)" for m in snapshots)
@@ -37,14 +37,19 @@ def section(data):
         f"The runs on {nx} x {ny} nodes at their last level, {ZOOM:g} B x {ZOOM:g} B "
         "next to the footing, coloured by the shear strain eps_s = sqrt(2/3 e':e') of "
         "the Hencky strain (e' its deviator, plane strain) of each triangle of the "
-        "initial nodes (FEM: its elements' corners; EFG: the Delaunay triangles of its "
-        "initial nodes, the dots showing area-weighted nodal averages). The largest "
+        "initial nodes, EFG and FEM alike: each triangle filled with its own value on "
+        f"one linear scale ending at percentile {STRAIN_PERCENTILE:g} of the values in "
+        "view, the few larger ones (slivers at the footing's edge) in the top colour "
+        "(FEM: its elements' corners; EFG: the Delaunay triangles of its "
+        "initial nodes, moved with them, which `efg` integrates on until it rebuilds "
+        "them and `efg-paper` does not use). The largest "
         f"eps_s within {EDGE_RADIUS:g} B of the footing's edge: "
         + ", ".join(f"{r.method} {r.eps_s_edge:.3g}" for r in table.itertuples())
-        + ". Elements outlined in red are distorted, their smallest angle below "
+        + ". Triangles outlined in red are distorted, their smallest angle below "
         f"{DISTORTED:.2g} of its undeformed value: "
         + ("; ".join(f"{r.method} {r.distorted} at the last level ({r.inverted} "
-                     "inverted)" for r in fem.itertuples()) if len(fem) else "no FEM run")
+                     "inverted)" for r in counted.itertuples()) if len(counted) else
+           "none counted")
         + ".",
         "",
         "![excess pore pressure](figures/footing_pore_pressure.png)",
@@ -81,7 +86,7 @@ def write(root, results):
     root = Path(root)
     grid = results[0].case.discretisation
     data = {"footing deformation": measures(results), "grid": (grid.nx, grid.ny),
-            "snapshots": {r.method: len(r.snapshots) for r in results}}
+            "snapshots": {RunView(r).label: len(r.snapshots) for r in results}}
     written = [*tables.write(data["footing deformation"],
                              root / "tables" / "footing_deformation"),
                deformed_figure(results, root / "figures" / "footing_deformed.png"),

@@ -18,13 +18,13 @@ since it re-triangulates every step) is distorted once its
 smallest angle falls below :data:`soilwater.geometry.quality.DISTORTED` of its undeformed value.
 """
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
 from soilwater.studies.harness import deformation
 from soilwater.studies.harness import tables
-from soilwater.studies.harness.footing import CASE, METHODS, width
+from soilwater.studies.harness.footing import CASE, METHODS, time_steps, width
+from soilwater.studies.harness.quick import pick
 from soilwater.studies.harness.grids import refined
 from soilwater.studies.harness.runs import solved
 from soilwater.references.closed_forms import PRANDTL, undrained_strength
@@ -34,15 +34,15 @@ from soilwater.methods import EFG_METHODS
 
 #: Equal spacings per B at the footing (:func:`soilwater.studies.harness.grids.refined`);
 #: the middle one is the built-in case's.
-DENSITIES = (4, 8, 12)
+DENSITIES = pick((4, 8, 12), (2, 4))
 #: Time steps to 0.5 B of the extra runs of :data:`STEPPED` on the coarsest nodes (the
-#: case has 100).
-EFG_STEPS = (200, 400)
+#: case has 100; a quick report 50).
+EFG_STEPS = pick((200, 400), (100, 200))
 #: The method whose step-count dependence the extra runs show: the paper's scheme.
 STEPPED = "efg-paper"
 #: Settlement [B] to which every method is pushed on the built-in nodes (at the built-in
 #: step), to see how far it gets.
-DEEP = 1.0
+DEEP = pick(1.0, 0.75)
 #: The run whose curve the others are measured against: (label, density).
 REFERENCE = ("fem-th", DENSITIES[-1])
 #: A curve is "within" Prandtl's pressure from the first settlement where it is within
@@ -69,12 +69,13 @@ def meshless(labels):
 def runs(methods=METHODS, densities=DENSITIES, efg_steps=EFG_STEPS, deep=DEEP):
     """The study's runs: ``(label, method, density, steps, overrides)``: every method on
     every density to the case's 0.5 B, EFG with more steps on the coarsest nodes, and
-    every method on the built-in nodes to ``deep`` B (label ``"METHOD, to 1 B"``; steps
-    counted to 0.5 B)."""
+    every method on the middle density (the built-in nodes) to ``deep`` B (label
+    ``"METHOD, to 1 B"``; steps counted to 0.5 B). Steps: the case's, or half as many in
+    a quick report (:func:`~soilwater.studies.harness.footing.time_steps`)."""
     case = load_case(CASE)
-    steps, end = case.time.steps, case.time.end
+    steps, end = time_steps(case), case.time.end
     middle = densities[len(densities) // 2]
-    out = [(label, method, core, steps, (*refined(core), *extra))
+    out = [(label, method, core, steps, (*refined(core), *extra, f"time.steps={steps}"))
            for label, (method, extra) in methods.items() for core in densities]
     out += [(f"{STEPPED}, {n} steps", STEPPED, densities[0], n,
              (*refined(densities[0]), f"time.steps={n}")) for n in efg_steps]
@@ -193,79 +194,6 @@ def _at(s, p, where):
     return float(np.interp(where, s, p)) if s[-1] >= where - 1e-9 else np.nan
 
 
-def figure(table, path, reference=REFERENCE):
-    """Load-settlement curves over Prandtl's pressure: a panel per method, one line per
-    density (EFG's extra step counts dashed, the runs aimed at :data:`DEEP` B dotted,
-    each labelled with where it stopped if it stopped early), the reference curve in
-    every panel."""
-    ref = table[(table.label == reference[0]) & (table.core == reference[1])]
-    labels = family(table.label)
-    methods = list(dict.fromkeys(labels))
-    fig, axes = plt.subplots(1, len(methods), figsize=(4.2 * len(methods), 4.4),
-                             sharey=True, constrained_layout=True, squeeze=False)
-    for ax, method in zip(axes[0], methods):
-        for k, ((label, core), run) in enumerate(table[labels == method].groupby(
-                ["label", "core"], sort=False)):
-            deep = run.to.iloc[0] > table.to.min() + 1e-9
-            more = run.steps.iloc[0] != table.steps.min()
-            reached = run.reached.iloc[0]
-            end = (f"to {run.to.iloc[0]:.3g} B" if deep else f"{run.steps.iloc[0]} steps")
-            if reached < run.to.iloc[0] - 1e-9:
-                end += f", stops at {reached:.3g} B"
-            ax.plot(run.settlement, run.pressure, ":" if deep else "--" if more else "-",
-                    color=f"C{k}", lw=2.0 if deep else 1.5,
-                    label=f"{run.nodes.iloc[0]} nodes, {end}")
-        ax.plot(ref.settlement, ref.pressure, "--", color="0.45", lw=1.0,
-                label=f"reference: {reference[0]}, {ref.nodes.iloc[0]}")
-        ax.axhline(1.0, color="k", lw=1, label="Prandtl (2 + pi) s_u")
-        ax.axhspan(1 - WITHIN, 1 + WITHIN, color="k", alpha=0.08)
-        ax.set(title=method, xlabel="settlement / B [-]")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left")
-    axes[0, 0].set_ylabel("mean contact pressure / (2 + pi) s_u [-]")
-    fig.suptitle("Rigid smooth strip footing on undrained Cam-clay (weightless, NC, "
-                 f"10 B x 10 B): band = within {WITHIN:.0%} of Prandtl", fontsize=10)
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
-
-
-def cost_figure(summary, path):
-    """Error against the reference curve over run time: per method a line through its
-    densities (to 0.5 B at the case's step), EFG's extra step counts as open markers;
-    the runs aimed at :data:`DEEP` B are left out (their time buys the deeper part).
-    Each marker is labelled with its nodes and steps, and where the run stopped if it
-    stopped early (its error is then over a shorter range)."""
-    fig, ax = plt.subplots(figsize=(6.8, 4.8), constrained_layout=True)
-    shallow = summary[(summary.to <= summary.to.min() + 1e-9) & (summary.error > 0)]
-    offsets = {0: (4, 4, "left"), 1: (-4, -10, "right"), 2: (4, 4, "left"),
-               3: (-4, 4, "right")}
-    for k, (method, group) in enumerate(shallow.groupby(family(shallow.label), sort=False)):
-        plain = group[group.label == method]
-        extra = group[group.label != method]
-        ax.loglog(plain.run_time, plain.error, "o-", color=f"C{k}", label=method)
-        if len(extra):
-            ax.loglog(extra.run_time, extra.error, "o", mfc="none", color=f"C{k}",
-                      label=f"{method}, more steps")
-        dx, dy, ha = offsets.get(k, (4, 4, "left"))
-        for r in group.itertuples():
-            note = f"{r.nodes}, {r.steps}"
-            if r.reached < r.to - 1e-9:
-                note += f", stops {r.reached:.3g} B"
-            side = (7, -2, "left") if r.label != method else (dx, dy, ha)
-            ax.annotate(note, (r.run_time, r.error), fontsize=6, ha=side[2],
-                        va="center" if r.label != method else "baseline",
-                        textcoords="offset points", xytext=side[:2])
-    ax.set(xlabel="run time [s]", ylabel=f"largest |p / p_ref - 1| from {FROM:g} B [-]",
-           title=f"Strip footing: error against {REFERENCE[0]} on "
-           f"{DENSITIES[-1]} spacings per B, and cost")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
-
-
 def section(summary):
     """The report's strip-footing section from :func:`summary`'s table."""
     at = f"at_{AT:g}B"
@@ -280,6 +208,8 @@ def section(summary):
         "## Strip footing: how far each method gets",
         "",
         "![footing](figures/footing.png)",
+        "",
+        "![footing convergence](figures/footing_convergence.png)",
         "",
         "A rigid smooth strip footing (B = 1 m, symmetry half) pushed at a constant rate "
         "into a weightless normally consolidated Cam-clay layer (Table 1, p'0 = 3 kPa, "

@@ -2,24 +2,32 @@
 (:class:`RunView`), and the eps_s colour scale and window height shared by several runs.
 
 The views show the ``ZOOM B`` wide, ``ZOOM B`` deep window next to the footing (symmetry
-axis at x = 0), up to the highest node in it.
+axis at x = 0), up to the highest node in it. EFG and FEM runs are drawn alike: each
+triangle of :func:`soilwater.studies.harness.deformation.triangulation` (FEM: its
+elements; EFG: the Delaunay triangles of its initial nodes) filled with its own eps_s,
+on one linear colour scale that ends at a high percentile of the values in view
+(:func:`strain_norm`), the few larger ones in the top colour, marked by the colour bar's
+arrow.
 """
 
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.collections import PolyCollection
-from matplotlib.colors import PowerNorm
+from matplotlib.colors import Normalize
 from matplotlib.patches import Rectangle
 
-from soilwater.studies.harness import deformation
+from soilwater.studies.harness import deformation, figures
 from soilwater.studies.harness.footing import width
 from soilwater.geometry.quality import DISTORTED, cell_quality
 
 #: Width and depth of the window next to the footing [B].
 ZOOM = 2.5
 #: Colour map of eps_s, and its colour bar's label.
-CMAP = "viridis"
+CMAP = figures.SEQUENTIAL
 STRAIN_LABEL = "shear strain eps_s = sqrt(2/3 e':e'), Hencky [-]"
+#: Percentile of the triangle values in view (all runs' final levels) at which the eps_s
+#: colour scale ends: the largest values sit in a few slivers at the footing's edge.
+STRAIN_PERCENTILE = 99.0
 
 
 class RunView:
@@ -33,12 +41,14 @@ class RunView:
         self.B = width(result.case)
         self.surface = result.case.geometry.height
         (_, self.segment), = result.case.boundary.segments()
-        self.cloud = not result.snapshots[0].cells
         self.final = len(result.snapshots) - 1
 
     @property
     def label(self):
-        return self.result.method
+        """The run's method as the study names it: ``efg-paper`` for EFG in the paper's
+        configuration, else the result's method."""
+        paper = self.result.summary.get("configuration") == "paper"
+        return "efg-paper" if paper else self.result.method
 
     def strain(self, k):
         """eps_s of each triangle at snapshot ``k``."""
@@ -88,10 +98,11 @@ class RunView:
             edgecolor="k", lw=0.8, zorder=5))
 
     def strain_view(self, ax, norm):
-        """Artists showing a snapshot coloured by eps_s on ``ax``: EFG nodes as dots
-        (area-averaged nodal values), FEM elements filled, the distorted ones (smallest
-        angle below :data:`soilwater.geometry.quality.DISTORTED` of its undeformed value)
-        outlined in red, inverted ones (NaN eps_s) magenta; and the footing.
+        """Artists showing a snapshot coloured by eps_s on ``ax``: every triangle filled
+        with its eps_s, the distorted ones (smallest angle below
+        :data:`soilwater.geometry.quality.DISTORTED` of its undeformed value) outlined in
+        red, inverted ones (NaN eps_s) magenta; and the footing. EFG and FEM alike (module
+        docstring).
 
         Returns
         -------
@@ -99,47 +110,47 @@ class RunView:
             For the colour bar.
         show : callable
             ``show(k)`` puts snapshot ``k`` into the artists; returns the number of
-            distorted and of inverted elements (None for EFG).
+            distorted and of inverted triangles.
         """
         footing = self.footing(ax, 0)
-        if self.cloud:
-            dots = ax.scatter(*self.initial.T, c=np.zeros(len(self.initial)), s=10,
-                              cmap=CMAP, norm=norm, edgecolors="none", zorder=3)
-
-            def draw(points, eps):
-                dots.set_offsets(points)
-                dots.set_array(deformation.nodal(eps, self.initial, self.triangles))
-            mappable = dots
-        else:
-            cells = ax.add_collection(PolyCollection(
-                self.initial[self.triangles], norm=norm, edgecolors="0.3",
-                linewidths=0.15, cmap=plt.get_cmap(CMAP).with_extremes(bad="magenta")))
-            outlines = ax.add_collection(PolyCollection(
-                [], facecolors="none", edgecolors="red", linewidths=1.0, zorder=4))
-
-            def draw(points, eps):
-                corners = points[self.triangles]
-                angle, _ = cell_quality(corners)
-                cells.set_verts(corners)
-                cells.set_array(eps)
-                distorted = angle < DISTORTED * self.angle0
-                outlines.set_verts(corners[distorted])
-                return int(distorted.sum()), int((angle <= 0).sum())
-            mappable = cells
+        cells = ax.add_collection(PolyCollection(
+            self.initial[self.triangles], norm=norm, edgecolors="0.3", linewidths=0.15,
+            cmap=plt.get_cmap(CMAP).with_extremes(bad="magenta")))
+        outlines = ax.add_collection(PolyCollection(
+            [], facecolors="none", edgecolors="red", linewidths=1.0, zorder=4))
 
         def show(k):
             footing.set_y(self.surface - self.loads(k)[0])
-            return draw(self.result.snapshots[k].points, self.strain(k))
-        return mappable, show
+            corners = self.result.snapshots[k].points[self.triangles]
+            angle, _ = cell_quality(corners)
+            cells.set_verts(corners)
+            cells.set_array(self.strain(k))
+            distorted = angle < DISTORTED * self.angle0
+            outlines.set_verts(corners[distorted])
+            return int(distorted.sum()), int((angle <= 0).sum())
+        return cells, show
 
 
-def strain_norm(runs):
-    """One colour scale for eps_s: 0 to the largest triangle value in view at any run's
-    final level, square-root spaced (``PowerNorm(0.5)``) so that the small strains
-    away from the footing stay visible; the colour bar shows the spacing."""
-    largest = max(np.nanmax(run.strain(run.final)[run.in_view(
-        run.result.snapshots[run.final].points[run.triangles].mean(1))]) for run in runs)
-    return PowerNorm(0.5, 0.0, largest if largest > 0 else 1.0)  # 1: nothing strained
+def final_strains(runs):
+    """eps_s of every triangle in view (by current centroid) at each run's final level,
+    pooled; inverted triangles (NaN) left out."""
+    values = np.concatenate([run.strain(run.final)[run.in_view(
+        run.result.snapshots[run.final].points[run.triangles].mean(1))] for run in runs])
+    return values[np.isfinite(values)]
+
+
+def strain_norm(runs, percentile=STRAIN_PERCENTILE):
+    """One linear colour scale for eps_s: 0 to ``percentile`` of :func:`final_strains`
+    (values above take the top colour: draw the colour bar with ``extend="max"`` when
+    :func:`strain_extend` says so)."""
+    top = np.percentile(final_strains(runs), percentile)
+    return Normalize(0.0, top if top > 0 else 1.0)  # 1: nothing strained
+
+
+def strain_extend(runs, norm):
+    """``"max"`` if some triangle in view at a run's final level is above ``norm``'s
+    top (the colour bar's arrow marks them), else ``"neither"``."""
+    return "max" if final_strains(runs).max(initial=0.0) > norm.vmax else "neither"
 
 
 def window_top(runs):

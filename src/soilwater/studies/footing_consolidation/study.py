@@ -13,13 +13,18 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from soilwater.studies.harness import tables
+from soilwater.studies.harness import figures, tables
 from soilwater.studies.harness.footing import PLAIN, width
+from soilwater.studies.harness.grids import refined
+from soilwater.studies.harness.quick import pick
 from soilwater.studies.harness.runs import solved
 from soilwater.references.closed_forms import PRANDTL, undrained_strength
 from soilwater.case.loader import load_case
 
 CASE = "strip-footing-consolidation"
+#: Spacings per B at the footing (:func:`soilwater.studies.harness.grids.refined`): the
+#: built-in nodes', or the footing study's middle density in a quick report.
+CORE = pick(8, 4)
 #: The end of loading [s] (the load function's first plateau).
 LOADED = 10.0
 
@@ -41,7 +46,7 @@ def curves(methods=tuple(PLAIN)):
     q = footing.force / (footing.end - footing.start)
     (probe, ) = case.probes
     frames = []
-    for method, result in zip(methods, solved([(CASE, (), m) for m in methods])):
+    for method, result in zip(methods, solved([(CASE, refined(CORE), m) for m in methods])):
         h = result.history
         frames.append(pd.DataFrame({
             "method": method, "time": h["time"].to_numpy(),
@@ -79,13 +84,12 @@ def summary(table, undrained):
         half of ``final - loaded`` has come), ``excess_loaded``, ``excess_final`` (over
         the footing pressure), ``run_time`` [s], ``iterations_per_step``.
     """
-    core = load_case(CASE).discretisation.x[0][1]
     rows = []
     for method, run in table.groupby("method", sort=False):
         t, s = run.time.to_numpy(), run.settlement.to_numpy()
         at = np.flatnonzero(t >= LOADED * (1 - 1e-9))[0]
         loaded, final = s[at], s[-1]
-        ref = undrained[(undrained.label == method) & (undrained.core == core)]
+        ref = undrained[(undrained.label == method) & (undrained.core == CORE)]
         half = np.flatnonzero(s >= loaded + (final - loaded) / 2)
         rows.append({
             "method": method, "loaded_at": t[at], "pressure": run.pressure.iloc[at],
@@ -113,9 +117,7 @@ def figure(table, path):
         ax.axvline(LOADED, color="k", lw=0.8, ls=":")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8)
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
+    return figures.save(fig, path)
 
 
 def section(summary):

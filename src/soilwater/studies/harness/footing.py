@@ -1,5 +1,7 @@
-"""The strip footing's methods and width, shared by the footing studies and the
-essential-conditions study."""
+"""The strip footing's methods, width and time steps, shared by the footing studies and
+the essential-conditions study."""
+
+from soilwater.studies.harness.quick import pick
 
 
 #: The built-in case of the strip-footing studies.
@@ -18,6 +20,17 @@ METHODS = {"efg": ("efg", ()), "efg-paper": ("efg-paper", ()),
 #: The methods of :data:`METHODS` without overrides, whose labels are their method names
 #: (the paper's comparison): the partially drained footing and the pictures run these.
 PLAIN = {label: spec for label, spec in METHODS.items() if not spec[1]}
+
+
+#: Time steps per step of the built-in case: a quick report takes half as many, each
+#: twice as long.
+STEP_FACTOR = pick(1.0, 0.5)
+
+
+def time_steps(case, factor=1.0):
+    """Time steps of a footing run pushed ``factor`` times the case's settlement: the
+    case's steps scaled by ``factor`` and :data:`STEP_FACTOR`."""
+    return round(case.time.steps * factor * STEP_FACTOR)
 
 
 def width(case):

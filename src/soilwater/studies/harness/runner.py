@@ -2,9 +2,10 @@
 
 A :class:`Job` names a case (built-in or TOML file), a method and ``--set`` overrides.
 :func:`run` executes jobs in a local process pool (one worker per core by default) or on a
-Dask distributed scheduler (``dask=ADDRESS``, optional extra ``soilwater[dask]``), and
-returns one :class:`Outcome` per job, in order. A job that fails is an outcome with its
-error; the others complete.
+Dask distributed scheduler (``dask=ADDRESS``, optional extra ``soilwater[dask]``; its
+workers need not share this process's file system: their results come back and are cached
+here, :mod:`soilwater.studies.harness.cluster`), and returns one :class:`Outcome` per job,
+in order. A job that fails is an outcome with its error; the others complete.
 
 Results are cached on disk under a key hashing the resolved case, the method, the linear
 solver (name and version, :func:`soilwater.linalg.backends.identity`) and the source code
@@ -19,14 +20,12 @@ import json
 import os
 import pickle
 import time
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
 
 import pandas as pd
-from tqdm import tqdm
-
 from soilwater.case.loader import load_case
 from soilwater.errors import SoilwaterError
 from soilwater.fem.spaces import PAIRS
@@ -34,8 +33,13 @@ from soilwater.linalg.backends import identity, linear_solver
 from soilwater.methods import EFG_METHODS, solver
 
 from soilwater.studies.harness.paths import PACKAGE, cache_folder
+from soilwater.studies.harness.progress import Sweep, record, recorded
+
 #: Scheduler address for every sweep of this process (``--dask ADDRESS``), or None.
 DASK = {"address": None}
+#: How sweeps show their progress when their caller does not say: ``show`` (the report
+#: turns it on) and ``desc``, the sweep's name (the study being made).
+PROGRESS = {"show": False, "desc": "sweep"}
 #: Jobs run and jobs read from the cache in this process (the report states them).
 COUNTS = {"runs": 0, "cached": 0}
 #: Solver folders (``efg``, ``fem``) of the jobs run or read since last cleared: a
@@ -103,7 +107,7 @@ def execute(job, cache_dir=SETTING):
     cache_dir = cache_folder() if cache_dir is SETTING else cache_dir
     tic = time.perf_counter()
     try:
-        path = Path(cache_dir) / f"{job.key()}.pkl" if cache_dir else None
+        path = _cache_path(job.key(), cache_dir) if cache_dir else None
         cached = _read_cache(path)
         if cached is not None:
             return Outcome(job, cached, None, time.perf_counter() - tic, True)
@@ -116,6 +120,15 @@ def execute(job, cache_dir=SETTING):
         return Outcome(job, None, f"{type(err).__name__}: {err}", time.perf_counter() - tic)
 
 
+def _is_cached(job, cache_dir):
+    """Whether ``job``'s result is in ``cache_dir`` (False for a case that cannot be
+    read: its run reports the error)."""
+    try:
+        return cache_dir is not None and (Path(cache_dir) / f"{job.key()}.pkl").exists()
+    except (SoilwaterError, ArithmeticError, ValueError, OSError):
+        return False
+
+
 def _read_cache(path):
     """A cached Result, or None (no cache, no entry, or a cache this worker cannot read)."""
     try:
@@ -126,7 +139,7 @@ def _read_cache(path):
 
 
 def _write_cache(path, result):
-    """Store a Result; a cache this worker cannot write (a remote Dask worker) is skipped."""
+    """Store a Result; a cache folder this process cannot write is skipped."""
     if path is None:
         return
     try:
@@ -139,7 +152,7 @@ def _write_cache(path, result):
         pass
 
 
-def run(jobs, workers=None, dask=None, cache_dir=SETTING, progress=True, desc="sweep"):
+def run(jobs, workers=None, dask=None, cache_dir=SETTING, progress=None, desc=None):
     """Execute jobs and return their outcomes in order.
 
     Parameters
@@ -155,28 +168,34 @@ def run(jobs, workers=None, dask=None, cache_dir=SETTING, progress=True, desc="s
         :func:`soilwater.studies.harness.paths.cache_folder`, ``SOILWATER_CACHE`` or
         ``.cache/runs``, read here so that local processes and Dask workers get the
         folder, not the setting).
-    progress : bool
-        A progress bar over the jobs.
+    progress : bool, optional
+        Show the sweep's progress: runs cached, to run and done and the time left
+        (:class:`soilwater.studies.harness.progress.Sweep`; a bar on a terminal, plain
+        lines without one). Default: :data:`PROGRESS`, off unless the report runs.
+    desc : str, optional
+        The sweep's name in its progress (default: :data:`PROGRESS`).
     """
     jobs, dask = list(jobs), dask or DASK["address"]
     cache_dir = cache_folder() if cache_dir is SETTING else cache_dir
-    bar = tqdm(total=len(jobs), desc=desc, unit="run", disable=not progress or None,
-               leave=False)
+    workers = workers or os.cpu_count()
+    bar = Sweep(jobs, [_is_cached(job, cache_dir) for job in jobs], recorded(cache_dir),
+                workers, desc or PROGRESS["desc"],
+                enabled=PROGRESS["show"] if progress is None else progress)
     if dask is not None:
         outcomes = _run_dask(jobs, dask, cache_dir, bar)
-    elif (workers or os.cpu_count()) == 1 or len(jobs) == 1:
+    elif workers == 1 or len(jobs) == 1:
         outcomes = []
-        for job in jobs:
+        for k, job in enumerate(jobs):
             outcomes.append(execute(job, cache_dir))
-            bar.update()
+            bar.update(k)
     else:
-        with ProcessPoolExecutor(max_workers=workers or os.cpu_count()) as pool:
-            futures = [pool.submit(execute, job, cache_dir) for job in jobs]
-            outcomes = []
-            for future in futures:
-                outcomes.append(future.result())
-                bar.update()
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            futures = {pool.submit(execute, job, cache_dir): k for k, job in enumerate(jobs)}
+            for future in as_completed(futures):
+                bar.update(futures[future])
+            outcomes = [future.result() for future in futures]
     bar.close()
+    record(cache_dir, outcomes)
     COUNTS["runs"] += len(outcomes)
     COUNTS["cached"] += sum(o.cached for o in outcomes)
     USED.update(folder for job in jobs for folder in SOURCES[job.method])
@@ -184,16 +203,46 @@ def run(jobs, workers=None, dask=None, cache_dir=SETTING, progress=True, desc="s
 
 
 def _run_dask(jobs, address, cache_dir, bar):
+    """Outcomes of ``jobs`` in order, on the Dask scheduler at ``address``.
+
+    Each job found in this process's cache ``cache_dir`` is read here (``cached``); only
+    the others go to the workers (:func:`soilwater.studies.harness.cluster.compute`:
+    the workers need not share a file system with this process, and one whose source
+    differs from this process's is refused with a :class:`SoilwaterError`). Each
+    successful result they send back is written to ``cache_dir`` under the key the
+    worker computed it under. No connection is made when every job is cached here.
+    """
+    from soilwater.studies.harness import cluster
+
+    outcomes = [_lookup(job, cache_dir) for job in jobs]
+    missing = [k for k, outcome in enumerate(outcomes) if outcome is None]
+    for k, outcome in enumerate(outcomes):
+        if outcome is not None:
+            bar.update(k)
+    for i, outcome, key in cluster.compute([jobs[k] for k in missing], address,
+                                           cache=bool(cache_dir)):
+        outcomes[missing[i]] = outcome
+        if key is not None and cache_dir:
+            _write_cache(_cache_path(key, cache_dir), outcome.result)
+        bar.update(missing[i])
+    return outcomes
+
+
+def _lookup(job, cache_dir):
+    """``job``'s Outcome read from ``cache_dir`` (``cached``), or None: no cache, no
+    entry, or a case this process cannot resolve (the worker that runs it reports it)."""
+    tic = time.perf_counter()
     try:
-        from dask.distributed import Client, as_completed
-    except ImportError:
-        raise SoilwaterError("a Dask sweep needs the optional extra: pip install "
-                             "'soilwater[dask]'") from None
-    with Client(address) as client:
-        futures = client.map(execute, jobs, cache_dir=cache_dir, pure=False)
-        for _ in as_completed(futures):
-            bar.update()
-        return client.gather(futures)
+        result = _read_cache(_cache_path(job.key(), cache_dir)) if cache_dir else None
+    except (SoilwaterError, ArithmeticError, ValueError, OSError):
+        return None
+    return None if result is None else Outcome(job, result, None,
+                                               time.perf_counter() - tic, True)
+
+
+def _cache_path(key, cache_dir):
+    """The cache file of the result under ``key`` in the folder ``cache_dir``."""
+    return Path(cache_dir) / f"{key}.pkl"
 
 
 def table(outcomes):

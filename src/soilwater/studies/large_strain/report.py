@@ -1,7 +1,10 @@
 """Large-strain consolidation against Gibson's solution in the report
 (:mod:`soilwater.studies.large_strain.study`)."""
 
+from pathlib import Path
+
 from soilwater.studies.harness import tables
+from soilwater.studies.large_strain import figures as strain_figures
 from soilwater.studies.large_strain import study
 
 NAME = "large-strain"
@@ -10,8 +13,8 @@ NAME = "large-strain"
 def run(root, inputs):
     """The tables ``large_strain_curves``, ``large_strain_small_strain``,
     ``large_strain``, ``large_strain_profiles`` and ``large_strain_profile_errors`` and
-    the figures ``large_strain`` and ``large_strain_profiles``; returns ``{"large
-    strain", "large strain small", "large strain profile errors"}``."""
+    the figures of :func:`figures`; returns ``{"large strain", "large strain small",
+    "large strain profile errors", "large strain curves", "large strain profiles"}``."""
     curves = study.curves()
     small = study.small_strain(curves)
     summary = study.summary(curves)
@@ -21,10 +24,23 @@ def run(root, inputs):
                         (summary, "large_strain"), (profiles, "large_strain_profiles"),
                         (errors, "large_strain_profile_errors")):
         tables.write(table, root / "tables" / stem)
-    study.figure(curves, small, root / "figures" / "large_strain.png")
-    study.profile_figure(profiles, study.CASES[0], root / "figures" / "large_strain_profiles.png")
-    return {"large strain": summary, "large strain small": small,
-            "large strain profile errors": errors}
+    data = {"large strain": summary, "large strain small": small,
+            "large strain profile errors": errors, "large strain curves": curves,
+            "large strain profiles": profiles}
+    figures(root, data)
+    return data
+
+
+def figures(root, data):
+    """The figures ``large_strain`` (settlement against Gibson's) and
+    ``large_strain_profiles`` (the loaded column's profiles) under ``root/figures``, from
+    :func:`run`'s data; returns their paths."""
+    folder = Path(root) / "figures"
+    return [strain_figures.settlement(data["large strain curves"],
+                                      data["large strain small"],
+                                      folder / "large_strain.png"),
+            strain_figures.profiles(data["large strain profiles"], study.CASES[0],
+                                    folder / "large_strain_profiles.png")]
 
 
 def section(data):

@@ -12,11 +12,11 @@ load and drainage. Time is measured in ``T = d^2 / c_v0``
 (:func:`soilwater.references.gibson.consolidation_time`).
 """
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
 from soilwater.studies.harness import tables
+from soilwater.studies.harness.quick import pick
 from soilwater.studies.harness.runs import solved
 from soilwater.references import gibson, gibson_clay
 from soilwater.references.closed_forms import terzaghi
@@ -33,7 +33,7 @@ WINDOWS = (0.01, 0.1, 1.0)
 PROFILE_TIMES = (0.05, 0.3, 1.0)
 #: Gibson's resolution: cells and steps per decade (converged to about 1e-4,
 #: soilwater.references.gibson).
-RESOLUTION = (800, 40)
+RESOLUTION = pick((800, 40), (200, 20))
 #: The anchor stress of the reference's compression line [kPa] (any: the line is one).
 SIGMA_REF = 10.0
 
@@ -238,68 +238,6 @@ def _excess_scale(ref):
         return abs(ref.load[-1][1] - ref.surcharge)
     return float(np.abs(gibson.solve(ref, [1e-9 * gibson.consolidation_time(ref)],
                                      *RESOLUTION).u_e).max())
-
-
-def figure(table, small, path):
-    """Settlement over log time, each case: the methods, Gibson's, and for the loaded
-    column small-strain Terzaghi; below, the error against Gibson."""
-    fig, axes = plt.subplots(2, len(CASES), figsize=(11, 7), sharex="col",
-                             height_ratios=(2, 1), constrained_layout=True)
-    for j, name in enumerate(CASES):
-        runs = table[table.case == name]
-        ref = runs[runs.method == METHODS[1]]
-        top, bottom = axes[0, j], axes[1, j]
-        top.semilogx(ref.t_over_T, ref.gibson, color="k", lw=2.5, alpha=0.4,
-                     label="Gibson (finite strain)")
-        if name == CASES[0]:
-            top.semilogx(small.t_over_T, small.settlement, "k--", lw=1,
-                         label="Terzaghi (small strain, initial mv, cv)")
-        for k, (method, run) in enumerate(runs.groupby("method", sort=False)):
-            top.semilogx(run.t_over_T, run.settlement, color=f"C{k}", lw=1, label=method)
-            bottom.semilogx(run.t_over_T, 100 * run.error, color=f"C{k}", lw=1,
-                            label=method)
-        top.set(ylabel="settlement [m]", title=name)
-        top.invert_yaxis()
-        bottom.set(xlabel="t / T  (T = d^2 / c_v0)", ylabel="error against Gibson [%]",
-                   ylim=(-5, 5))
-        bottom.axhspan(-2, 2, color="0.9", zorder=0)
-        for ax in (top, bottom):
-            ax.axvline(WINDOWS[1], color="k", lw=0.6, ls=":")
-            ax.grid(alpha=0.3, which="both")
-            ax.legend(fontsize=7)
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
-
-
-def profile_figure(table, name, path):
-    """Void ratio, mean effective stress, permeability and excess pore pressure against
-    the current height at :data:`PROFILE_TIMES`, one case: Gibson's as lines, the
-    methods as markers."""
-    runs = table[table.case == name]
-    quantities = (("e", "void ratio e", False), ("p_eff", "p' [kPa]", False),
-                  ("k", "permeability k [m/s]", True), ("p_w", "excess p_w [kPa]", False))
-    fig, axes = plt.subplots(1, 4, figsize=(13, 4.5), sharey=True, constrained_layout=True)
-    markers = ("o", "s", "^", "D")
-    ref = runs[runs.method == METHODS[1]]
-    for q, (column_, label, log) in enumerate(quantities):
-        ax = axes[q]
-        for i, (when, at) in enumerate(ref.groupby("t_over_T", sort=True)):
-            ax.plot(at[f"{column_}_gibson"], at.height, color=f"C{i + 3}", lw=2, alpha=0.5,
-                    label=f"Gibson, t = {when:.2g} T")
-        for m, (method, run) in enumerate(runs.groupby("method", sort=False)):
-            for i, (_, at) in enumerate(run.groupby("t_over_T", sort=True)):
-                ax.plot(at[column_], at.height, markers[m], ms=3.5, mfc="none",
-                        color=f"C{i + 3}", label=method if i == 0 else None)
-        ax.set(xlabel=label, xscale="log" if log else "linear")
-        ax.grid(alpha=0.3)
-    axes[0].set_ylabel("current height above the base [m]")
-    axes[-1].legend(fontsize=7)
-    fig.suptitle(f"{name}: profiles on the centre line (markers: {', '.join(METHODS)} "
-                 f"as {', '.join(markers)})")
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
 
 
 def section(summary, small, profile_errors):

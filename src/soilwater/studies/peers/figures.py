@@ -4,6 +4,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from soilwater.material.driver import closed_form_q, run_test
+from soilwater.studies.harness import figures
 from soilwater.material.presets import material_from_spec
 
 
@@ -33,6 +34,4 @@ def stress_paths_driver(path, preset="table1", strain=0.3):
     axes[0].set_ylabel("q/p'$_0$")
     axes[1].legend(loc="upper left", fontsize=9)
     fig.suptitle("Table 1 clay, normally consolidated: stress-point driver vs closed form")
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
+    return figures.save(fig, path)

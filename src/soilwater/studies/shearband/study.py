@@ -17,10 +17,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from soilwater.studies.harness import runner
+from soilwater.studies.harness import figures, runner
 from soilwater.studies.harness import tables
 from soilwater.studies.harness.deformation import nodal_strain
 from soilwater.studies.harness.metrics import band
+from soilwater.studies.harness.quick import pick
 from soilwater.studies.harness.onset import continuum_onset, solvers
 from soilwater.diagnostics.bifurcation import onset
 from soilwater.material.driver import continuum_path
@@ -32,7 +33,8 @@ CASE = "rough-compression"
 METHODS = ("efg", "fem-th", "fem-p1p1-stab")
 #: Node densities: the paper's 111 nodes (7 x 9 grid + cell centres) and twice the nodes
 #: per side (13 x 17 + centres, 413 nodes).
-DENSITIES = {"coarse": (), "fine": ("discretisation.nx=13", "discretisation.ny=17")}
+DENSITIES = pick({"coarse": (), "fine": ("discretisation.nx=13", "discretisation.ny=17")},
+                 {"coarse": ("time.steps=50",)})
 #: Axial strains at which the table reports the band (the last: the end of the case).
 STRAINS = (0.1, 0.15, 0.2)
 #: Variants of each run that may move a bifurcation onto another branch: the linear
@@ -105,7 +107,7 @@ def runs(methods=METHODS, densities=DENSITIES, variants=VARIANTS):
     labels = [(m, d, v) for d in densities for m in methods for v in usable]
     jobs = [runner.Job(CASE, m, densities[d] + usable[v][1], linear_solver=usable[v][0])
             for m, d, v in labels]
-    outcomes = runner.run(jobs, progress=False)
+    outcomes = runner.run(jobs)
     failed = [o for o in outcomes if not o.ok]
     if failed:
         raise SoilwaterError(f"{len(failed)} shear-band run(s) failed, first: "
@@ -296,9 +298,7 @@ def figure(study, table, predicted, path):
         ax.legend(fontsize=7, loc="upper right")
     fig.colorbar(image, ax=fig.axes[1:], shrink=0.8, extend="max",
                  label="shear strain eps_s = sqrt(2/3 e':e'), Hencky [-]")
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
-    return path
+    return figures.save(fig, path, dpi=130)
 
 
 def _configuration(ax, result, vmax):

@@ -2,10 +2,13 @@
 Table 2 as a sweep, the built-in column's first steps and skeletons, triangle rules, the
 stabilisations' factors and the pressure profiles (Table 2, Fig. 8)."""
 
+from pathlib import Path
+
 from soilwater.diagnostics import figures as infsup_figures
 from soilwater.diagnostics import pairs as infsup
 from soilwater.studies.harness import tables
-from soilwater.studies.stability import figures, findings, study
+from soilwater.studies.stability import figures as stability_figures
+from soilwater.studies.stability import findings, study
 
 NAME = "stability"
 
@@ -13,25 +16,34 @@ NAME = "stability"
 def run(root, inputs):
     """The section's tables (``infsup``, ``infsup_slopes``, ``column_stability``,
     ``table2``, ``column_ratios``, ``column_skeletons``, ``quadrature_orders``,
-    ``stabilisation_factors``, ``target_infsup``, ``column_profiles``) and figures;
-    returns them under the keys of :func:`section`."""
-    data = {"infsup": infsup.report_table()}
+    ``stabilisation_factors``, ``target_infsup``, ``column_profiles``) and
+    :func:`figures`; returns them under the keys of :func:`section`."""
+    data = {"infsup": infsup.report_table(study.INFSUP_SIZES)}
     data["infsup slopes"] = infsup.slopes(data["infsup"])
-    infsup_figures.infsup(data["infsup"], data["infsup slopes"],
-                          root / "figures" / "infsup.png")
     data["column stability"] = study.column_stability()
     data["table2"] = study.table2()
-    figures.table2(data["table2"], root / "figures" / "table2.png")
     data["column ratios"] = study.column_ratios()
     data["column skeletons"] = study.column_skeletons()
     data["quadrature orders"] = study.quadrature_orders()
     data["stabilisation factors"] = study.stabilisation_factors()
     data["target infsup"] = study.target_infsup(data["stabilisation factors"])
     data["profiles"] = study.column_profiles()
-    figures.column_profiles(data["profiles"], root / "figures" / "column_profiles.png")
+    figures(root, data)
     for key, stem in STEMS.items():
         tables.write(data[key], root / "tables" / stem)
     return data
+
+
+def figures(root, data):
+    """The figures ``infsup``, ``table2`` and ``column_profiles`` under
+    ``root/figures``, from :func:`run`'s data; returns their paths."""
+    folder = Path(root) / "figures"
+    folder.mkdir(parents=True, exist_ok=True)       # the inf-sup figure does not make it
+    return [infsup_figures.infsup(data["infsup"], data["infsup slopes"],
+                                  folder / "infsup.png"),
+            stability_figures.table2(data["table2"], folder / "table2.png"),
+            stability_figures.column_profiles(data["profiles"],
+                                              folder / "column_profiles.png")]
 
 
 #: The table of each key of the data: ``tables/STEM``.

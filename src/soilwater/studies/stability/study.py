@@ -19,6 +19,7 @@ from soilwater.efg.statics import solve
 from soilwater.studies.harness.metrics import (axis_profile, column_pollution, rating,
                                                terzaghi_errors)
 from soilwater.studies.harness.runs import FEM_METHODS, solved
+from soilwater.studies.harness.quick import pick
 
 
 #: Weight combinations of the paper's Table 2 for (u, p_w), and E-B/E-B.
@@ -90,7 +91,13 @@ def nodes_per_support(case):
     return float(np.diff(phi.indptr).mean())
 
 
-def stabilisation_factors(kinds=("perturbation", "projection"), factors=(1, 2, 4, 8),
+#: Nodes per side of the inf-sup tests (:func:`soilwater.diagnostics.pairs.measure`).
+INFSUP_SIZES = pick((5, 9, 17, 33), (5, 9, 17))
+#: The stabilisation factors tried.
+FACTORS = pick((1, 2, 4, 8), (1, 4))
+
+
+def stabilisation_factors(kinds=("perturbation", "projection"), factors=FACTORS,
                           grids=((3, 21), (5, 41), (9, 81))):
     """EFG Q/Q with each pressure stabilisation times ``efg.stabilisation_factor``: the
     undrained (k = 0) column's first-step interior pollution per grid (first step scaled
@@ -115,7 +122,7 @@ def stabilisation_factors(kinds=("perturbation", "projection"), factors=(1, 2, 4
                                   *o)) for nx, ny in grids]
         specs.append(("terzaghi", ("discretisation.nx=5", "discretisation.ny=41", *o)))
         *columns, terzaghi = solved(specs)
-        test = infsup.measure(["efg"], boundaries=["dirichlet"], overrides=o)
+        test = infsup.measure(["efg"], INFSUP_SIZES, boundaries=["dirichlet"], overrides=o)
         fit = infsup.slopes(test).iloc[0]
         rows.append({"stabilisation": kind, "factor": factor,
                      **{f"interior_{nx}x{ny}": _pollution(r)["interior"]
@@ -130,7 +137,7 @@ def stabilisation_factors(kinds=("perturbation", "projection"), factors=(1, 2, 4
 TARGET = 0.02
 
 
-def target_infsup(factors, target=TARGET, sizes=(9, 17, 33, 65)):
+def target_infsup(factors, target=TARGET, sizes=pick((9, 17, 33, 65), (9, 17, 33))):
     """The inf-sup test with v = 0 one refinement further (n = 65), for the smallest
     factor of each stabilisation that meets ``target`` in :func:`stabilisation_factors`
     (``factors``): whether its beta, still falling at n = 33, levels off.
@@ -155,7 +162,7 @@ def target_infsup(factors, target=TARGET, sizes=(9, 17, 33, 65)):
     return pd.concat(tables)[columns] if tables else pd.DataFrame(columns=columns)
 
 
-def quadrature_orders(orders=(2, 4, 6), combinations=COMBINATIONS):
+def quadrature_orders(orders=pick((2, 4, 6), (2, 4)), combinations=COMBINATIONS):
     """Does a weight need a higher triangle rule? Each weight combination at each
     Delaunay rule degree (``efg.order``, VCI on): the column's first-step interior
     pollution (5 x 41 nodes, k = 0 and 1e-5), Terzaghi's error for t >= 0.1 (5 x 41),

@@ -4,6 +4,7 @@ spread; each saves a PNG and returns its path."""
 import matplotlib.pyplot as plt
 import numpy as np
 
+from soilwater.studies.harness import figures
 from soilwater.studies.harness.runs import run_style
 
 
@@ -26,9 +27,7 @@ def uniqueness(members, continuum, path):
            "guaranteed)")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
+    return figures.save(fig, path)
 
 
 def bifurcation_ensemble(members, summary, path):
@@ -72,6 +71,4 @@ def bifurcation_ensemble(members, summary, path):
     fig.suptitle("Unconfined compression: ERR of every ensemble member (blue SuperLU, "
                  "orange PARDISO; line style: node jitter 0, 1e-12, 1e-9, 1e-6 of the "
                  "spacing)", fontsize=10)
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
+    return figures.save(fig, path)

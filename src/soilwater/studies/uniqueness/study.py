@@ -18,13 +18,14 @@ import pandas as pd
 
 from soilwater.studies.harness import runner
 from soilwater.studies.harness.onset import solvers
+from soilwater.studies.harness.quick import pick
 from soilwater.studies.harness.runs import DEPARTURE, PATH_RUNS, UNIQUENESS
 from soilwater.diagnostics.bifurcation import onset
 from soilwater.errors import SoilwaterError
 
 CASE = "unconfined-compression"
 #: Node jitters of the ensemble, as fractions of the nodal spacing (0: the built-in nodes).
-JITTERS = (0.0, 1e-12, 1e-9, 1e-6)
+JITTERS = pick((0.0, 1e-12, 1e-9, 1e-6), (0.0,))
 
 
 def ensemble(runs=PATH_RUNS, jitters=JITTERS, linear_solvers=None):
@@ -42,7 +43,7 @@ def ensemble(runs=PATH_RUNS, jitters=JITTERS, linear_solvers=None):
     jobs = [runner.Job(CASE, method, overrides + _perturbation(jitter), (),
                        linear_solver=solver)
             for _, method, overrides, jitter, solver in members]
-    outcomes = runner.run(jobs, progress=False)
+    outcomes = runner.run(jobs)
     failed = [o for o in outcomes if not o.ok]
     if failed:
         raise SoilwaterError(f"{len(failed)} ensemble run(s) failed, first: "

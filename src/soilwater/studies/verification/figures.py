@@ -1,14 +1,18 @@
-"""Figures of the verification sections: the problems, shape functions, background cells,
-cantilever convergence and the stress paths of Figs. 4 and 6; each saves a PNG and
-returns its path."""
+"""Figures of the verification sections: the problems, shape functions, background cells
+and cantilever convergence (the stress paths of Figs. 4 and 6 are
+:mod:`soilwater.studies.verification.path_figures`); each is one slide
+(:mod:`soilwater.studies.harness.figures`), saves a PNG and returns its path."""
+
+import textwrap
 
 import matplotlib.pyplot as plt
 import numpy as np
 
 from soilwater.efg.settings import DEFAULT_SCALE
-from soilwater.studies.harness.runs import run_style
+from soilwater.studies.harness import figures
 
 
+@figures.style()
 def background_cells(path):
     """Paper Figs. 3 and 5: background cells of the 111-node unconfined-compression specimen.
 
@@ -44,7 +48,7 @@ def background_cells(path):
         ax.triplot(*points.T, q.triangles, color="C2", label="Delaunay triangle", **style)
         return f"{len(q.triangles)} triangles, {len(q.points)}", q.points
 
-    fig, axes = plt.subplots(1, 4, figsize=(15, 5.8), constrained_layout=True)
+    fig, axes = figures.slide(1, 4, sharex=True, sharey=True)
     counts, points = triangles(axes[1], nodes, lw=0.8)
     axes[1].plot(*points.T, "+", color="C3", ms=3, mew=0.6)
     voronoi_plot_2d(Voronoi(nodes), axes[2], show_points=False, show_vertices=False,
@@ -61,21 +65,20 @@ def background_cells(path):
     limits = (-0.25, bulged[:, 0].max() + 0.25), (-0.25, height + 0.25)
     for ax, title, shown in zip(axes, titles, (nodes, nodes, nodes, bulged)):
         ax.plot(*shown.T, "ko", ms=2.5, label="node")
-        ax.set(aspect="equal", xlim=limits[0], ylim=limits[1], xlabel="x (m)",
-               ylabel="y (m)")
-        ax.set_title(title, fontsize=9.5)
+        ax.set(aspect="equal", xlim=limits[0], ylim=limits[1], xlabel="x [m]")
+        ax.set_title(textwrap.fill(title, 32), fontsize=11)
+        ax.grid(False)
+    axes[0].set_ylabel("y [m]")
     handles = {}
     for ax in axes[[3, 2]]:
         handles.update(zip(*ax.get_legend_handles_labels()[::-1]))
-    fig.legend(handles.values(), handles.keys(), loc="outside lower center", ncol=7,
-               fontsize=9)
+    fig.legend(handles.values(), handles.keys(), loc="outside lower center", ncol=4)
     fig.suptitle("Background cells of the 111-node specimen (paper Figs. 3 and 5), initial "
                  "nodal spacing {:g} x {:g} m".format(*case.spacing))
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
+    return figures.save(fig, path)
 
 
+@figures.style()
 def shape_functions(path, scale=DEFAULT_SCALE):
     """Paper Fig. 7: an interior node's MLS shape function and its x-derivative.
 
@@ -95,8 +98,7 @@ def shape_functions(path, scale=DEFAULT_SCALE):
     centre = 6.0  # grid over [0, 12 h]^2: boundary nodes' larger supports stay clear of I
     x = np.linspace(-2.4, 2.4, 961)
     line = np.column_stack([x + centre, np.full_like(x, centre)])
-    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5), sharex=True, sharey="row",
-                             constrained_layout=True)
+    fig, axes = figures.slide(2, 2, sharex=True, sharey="row")
     for column, spacing in enumerate((1.0, 0.5)):
         ticks = np.linspace(0.0, 2 * centre, int(round(2 * centre / spacing)) + 1)
         nodes = np.stack(np.meshgrid(ticks, ticks), axis=-1).reshape(-1, 2)
@@ -110,7 +112,7 @@ def shape_functions(path, scale=DEFAULT_SCALE):
         inside = int(np.sum(np.linalg.norm(nodes - nodes[node], axis=1) < radius))
         axes[0, column].set_title(f"nodal spacing {'h' if spacing == 1 else 'h/2'}, scale "
                                   f"factor {factor:g}\n{inside} nodes in the support "
-                                  f"(radius d$_{{mI}}$ = {radius:.2f} h)", fontsize=10)
+                                  f"(radius d$_{{mI}}$ = {radius:.2f} h)", fontsize=12)
         for ax in axes[:, column]:
             ax.axhline(0.0, color="0.6", lw=0.6)
             for edge in (-radius, radius):
@@ -118,27 +120,25 @@ def shape_functions(path, scale=DEFAULT_SCALE):
             on_line = ticks[np.abs(ticks - centre) <= 2.4] - centre
             ax.plot(on_line, np.zeros_like(on_line), "|", color="k", ms=9,
                     transform=ax.get_xaxis_transform(), label="node on the line")
-            ax.grid(alpha=0.3)
-        axes[1, column].set_xlabel("(x - x$_I$)/h  (h: coarse nodal spacing)")
-    axes[0, 0].set_ylabel("shape function $\\phi_I$")
-    axes[1, 0].set_ylabel("h d$\\phi_I$/dx")
+        axes[1, column].set_xlabel("(x - x$_I$)/h [-] (h: coarse nodal spacing)")
+    axes[0, 0].set_ylabel("shape function $\\phi_I$ [-]")
+    axes[1, 0].set_ylabel("h d$\\phi_I$/dx [-]")
     axes[0, 0].plot([], [], ":", color="0.4", label="support edge, |x - x$_I$| = d$_{mI}$")
     handles, labels = axes[0, 0].get_legend_handles_labels()
-    axes[0, 0].legend(handles[:5], labels[:5], loc="upper left", fontsize=9)
+    fig.legend(handles[:5], labels[:5], loc="outside lower center", ncol=5)
     fig.suptitle("Paper Fig. 7: MLS shape function (linear basis) of an interior node I "
                  "and its x-derivative along y = y$_I$\nsame support radius in both "
                  "columns, the right one with twice the nodal density")
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
+    return figures.save(fig, path)
 
 
+@figures.style()
 def efg_convergence(table, path):
     """Energy-norm error of the cantilever against nodal spacing, log-log, per weight/cells.
 
     ``table`` is :func:`soilwater.studies.verification.study.cantilever_convergence`.
     """
-    fig, ax = plt.subplots(figsize=(6.4, 4.6), constrained_layout=True)
+    fig, ax = figures.slide()
     styles = {"delaunay": "-", "squares": "--"}
     colours = {"Q": "C0", "E-A": "C1", "E-B": "C2"}
     for (weight, cells), group in table.groupby(["weight", "cells"], sort=False):
@@ -146,56 +146,19 @@ def efg_convergence(table, path):
                   label=f"{weight}, {cells} cells")
     h = np.array([table.h.min(), table.h.max()])
     e = table.energy.min() * (h / h[0])
-    ax.loglog(h, e, "k:", lw=1, label="slope 1")
-    ax.set(xlabel="nodal spacing h (m), beam 48 x 12", ylabel="relative energy-norm error",
+    ax.loglog(h, e, "k:", lw=1.5, label="slope 1")
+    ax.set(xlabel="nodal spacing h [m] (beam 48 x 12 m)",
+           ylabel="relative energy-norm error [-]",
            title="EFG cantilever (Timoshenko beam), plane strain, VCI")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8, ncol=2)
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
+    ax.grid(which="both")
+    spacings = sorted(table.h.unique())
+    ax.set_xticks(spacings, [f"{s:g}" for s in spacings])
+    ax.minorticks_off()
+    fig.legend(loc="outside right upper")
+    return figures.save(fig, path)
 
 
-def stress_paths(table, path):
-    """Paper Fig. 4: q/p'0 against p'/p'0 of every run and the driver, one panel per case.
-
-    ``table`` is :func:`soilwater.studies.verification.study.stress_paths`.
-    """
-    cases = list(dict.fromkeys(table.case))
-    fig, axes = plt.subplots(1, len(cases), figsize=(5.6 * len(cases), 4.8),
-                             constrained_layout=True, squeeze=False)
-    for ax, case in zip(axes[0], cases):
-        part = table[table.case == case]
-        first = part[part.run == part.run.iloc[0]]
-        ax.plot(np.r_[1.0, first.p_driver], np.r_[0.0, first.q_driver], "k-", lw=4,
-                alpha=0.3, label="stress-point driver (theory)")
-        for k, (run, group) in enumerate(part.groupby("run", sort=False)):
-            ax.plot(np.r_[1.0, group.p], np.r_[0.0, group.q], lw=1.3, label=run, **run_style(k))
-        ax.set(xlabel="p'/p'$_0$", ylabel="q/p'$_0$", xlim=(0.45, 1.05), ylim=(0, 0.85),
-               title=f"{case}: stress path (nodal or domain averages)")
-        ax.grid(alpha=0.3)
-    axes[0][-1].legend(fontsize=8, loc="upper right")
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
-
-
-def err_history(table, path, case="unconfined-compression"):
-    """Paper Fig. 6: ERR (eq. 1) against axial strain for every run of ``case``."""
-    part = table[table.case == case]
-    fig, ax = plt.subplots(figsize=(6.6, 4.6), constrained_layout=True)
-    for k, (run, group) in enumerate(part.groupby("run", sort=False)):
-        ax.semilogy(group.strain * 100, group.err.clip(lower=1e-12), lw=1.3, label=run,
-                    **run_style(k))
-    ax.set(xlabel="axial strain (%)", ylabel="ERR (paper eq. 1), floor 1e-12",
-           title="Unconfined compression: error of the nodal stretching D$_{22}$")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
-
-
+@figures.style()
 def problems(path, names=("unconfined-compression", "soil-column")):
     """Paper Figs. 3 and 8: nodes and boundary conditions of the two problems.
 
@@ -205,8 +168,7 @@ def problems(path, names=("unconfined-compression", "soil-column")):
     """
     from soilwater.case.loader import load_case
 
-    fig, axes = plt.subplots(1, len(names), figsize=(9, 5.6), constrained_layout=True,
-                             gridspec_kw={"width_ratios": [1.3, 1]})
+    fig, axes = figures.slide(1, len(names), gridspec_kw={"width_ratios": [1.3, 1]})
     for ax, name in zip(axes, names):
         case = load_case(name)
         nodes, loop = case.nodes(), case.boundary_loop()
@@ -217,17 +179,16 @@ def problems(path, names=("unconfined-compression", "soil-column")):
         for edge_name, edge in case.boundary.items():
             _edge(ax, case, edge_name, edge, size)
         ax.set_aspect("equal")
-        ax.set(title=f"{name}: {len(nodes)} nodes", xlabel="x (m)", ylabel="y (m)")
+        ax.set(title=f"{name}: {len(nodes)} nodes", xlabel="x [m]", ylabel="y [m]")
         ax.margins(0.12)
+        ax.grid(False)
     handles = [plt.Line2D([], [], color="C3", marker="|", ls="none", ms=8, label="fixed "
                           "component"),
                plt.Line2D([], [], color="C2", marker=">", ls="none", label="prescribed v = L x"),
                plt.Line2D([], [], color="C1", marker="v", ls="none", label="traction"),
                plt.Line2D([], [], color="C0", lw=3, label="drained (p$_w$ = 0)")]
-    fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8)
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
+    fig.legend(handles=handles, loc="outside lower center", ncol=4)
+    return figures.save(fig, path)
 
 
 def _edge(ax, case, name, edge, size):

@@ -2,9 +2,12 @@
 cells, patch test, cantilever convergence) and the stress paths of the unconfined
 compression and simple shear (Figs. 4 and 6)."""
 
+from pathlib import Path
+
 from soilwater.studies.harness import tables
 from soilwater.studies.harness.tables import below_noise, marked
-from soilwater.studies.verification import figures, study
+from soilwater.studies.verification import figures as core_figures
+from soilwater.studies.verification import path_figures, study
 
 NAME = "verification"
 #: Columns of the path summary that depend on the branch round-off chose.
@@ -13,24 +16,35 @@ BRANCH_PATHS = ("path_error", "err_max", "err_final")
 
 def run(root, inputs):
     """The tables ``patch_test``, ``efg_convergence``, ``stress_paths`` and
-    ``stress_paths_summary`` and their figures; returns them as ``{"patch",
-    "convergence", "path summary"}``."""
-    fig = root / "figures"
-    figures.problems(fig / "problems.png")
-    figures.shape_functions(fig / "shape_functions.png")
-    figures.background_cells(fig / "cells.png")
+    ``stress_paths_summary`` and the figures of :func:`figures`; returns them as
+    ``{"patch", "convergence", "paths", "path summary"}``."""
     patch = study.patch_test()
     convergence = study.cantilever_convergence(corrections=("vci", "none"))
-    figures.efg_convergence(convergence[convergence.correction == "vci"],
-                            fig / "efg_convergence.png")
     paths = study.stress_paths()
     summary = study.path_summary(paths)
-    figures.stress_paths(paths, fig / "fig4_stress_paths.png")
-    figures.err_history(paths, fig / "fig6_err.png")
     for table, stem in ((patch, "patch_test"), (convergence, "efg_convergence"),
                         (paths, "stress_paths"), (summary, "stress_paths_summary")):
         tables.write(table, root / "tables" / stem)
-    return {"patch": patch, "convergence": convergence, "path summary": summary}
+    data = {"patch": patch, "convergence": convergence, "paths": paths,
+            "path summary": summary}
+    figures(root, data)
+    return data
+
+
+def figures(root, data):
+    """The figures ``problems``, ``shape_functions``, ``cells`` (drawn from the built-in
+    cases, no run), ``efg_convergence``, ``fig4_stress_paths``, ``fig4_path_errors`` and
+    ``fig6_err`` under ``root/figures``, from :func:`run`'s data; returns their paths."""
+    folder = Path(root) / "figures"
+    convergence, paths = data["convergence"], data["paths"]
+    return [core_figures.problems(folder / "problems.png"),
+            core_figures.shape_functions(folder / "shape_functions.png"),
+            core_figures.background_cells(folder / "cells.png"),
+            core_figures.efg_convergence(convergence[convergence.correction == "vci"],
+                                         folder / "efg_convergence.png"),
+            path_figures.stress_paths(paths, folder / "fig4_stress_paths.png"),
+            path_figures.path_errors(paths, folder / "fig4_path_errors.png"),
+            path_figures.err_history(paths, folder / "fig6_err.png")]
 
 
 def section(data):
@@ -77,6 +91,7 @@ def section(data):
         "## Unconfined compression and simple shear (Figs. 4 and 6)",
         "",
         "![fig4](figures/fig4_stress_paths.png)",
+        "![fig4 path errors](figures/fig4_path_errors.png)",
         "![fig6](figures/fig6_err.png)",
         "",
         "Largest distance of the averaged path from the driver (over p'0) and ERR "

@@ -10,6 +10,7 @@ import itertools
 import numpy as np
 import pandas as pd
 
+from soilwater.studies.harness.quick import pick
 from soilwater.studies.harness.runs import PATH_RUNS, UNIQUENESS, solved
 from soilwater.efg.statics import solve
 from soilwater.diagnostics.bifurcation import onset
@@ -40,7 +41,11 @@ def patch_test(corrections=("vci", "none"), cells=tuple(CELLS)):
     return pd.DataFrame(rows)
 
 
-def cantilever_convergence(levels=((13, 4), (25, 7), (49, 13), (97, 25)),
+#: The cantilever's refinement levels (nodes along x and y).
+LEVELS = pick(((13, 4), (25, 7), (49, 13), (97, 25)), ((13, 4), (25, 7), (49, 13)))
+
+
+def cantilever_convergence(levels=LEVELS,
                            weights=WEIGHTS, cells=("delaunay", "squares"),
                            corrections=("vci",)):
     """Energy-norm error of the Timoshenko cantilever under refinement.
