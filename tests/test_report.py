@@ -261,6 +261,7 @@ def test_redraw_draws_the_figures_from_the_saved_output_and_runs_nothing(fake):
     module = sys.modules["fake_alpha.report"]
     drawn = []
     module.figures = lambda root, data: drawn.append((root, data["value"]))
+    sys.modules["fake_beta.report"].figures = textwrap  # a submodule named figures
     report.make_report(fake, redraw=True)
     assert drawn == [(fake, 1)] and len(runs("alpha")) == len(runs("beta")) == 1
     assert "alpha value 1" in (fake / "REPORT.md").read_text()
