@@ -7,6 +7,7 @@ counts its runs); no real study runs here.
 
 import ast
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -19,6 +20,7 @@ from soilwater.cli import main
 from soilwater.errors import SoilwaterError
 from soilwater.studies import registry
 from soilwater.studies import report
+from soilwater.studies.harness import sources
 from soilwater.studies.harness import study as store
 
 STUDIES = Path(soilwater.__file__).parent / "studies"
@@ -73,8 +75,13 @@ def test_a_full_report_runs_every_study_and_records_its_code(fake):
     assert fake / "REPORT.md" in written
     meta = store.load(fake, "alpha").meta
     assert meta["solvers"] == []
-    assert meta["code"] == store.inputs_hash(registry.STUDIES["alpha"], registry.STUDIES, [])
+    modules = store.dependencies(registry.STUDIES["alpha"], registry.STUDIES, [])
+    assert meta["modules"] == modules and meta["code"] == sources.digest(modules)
+    assert "case/model.py" in modules and "efg/solver.py" not in modules
+    assert any(p.endswith("fake_alpha/report.py") for p in modules)
     assert f"made from code `{meta['code'][:7]}`" in text
+    assert (f"Assembled by `soilwater report --out {fake}` on " in text
+            and f"from source `{sources.package_hash()}`" in text)
     assert "Stale" not in text
 
 
@@ -91,41 +98,55 @@ def test_only_reruns_the_named_study_and_keeps_the_others_output(fake):
     assert "Stale" not in text
 
 
-def test_a_changed_source_marks_the_section_stale(fake):
+def test_a_changed_source_marks_the_section_stale_and_a_comment_does_not(fake):
     report.make_report(fake)
     source = Path(sys.modules["fake_beta.report"].__file__)
     source.write_text(source.read_text() + "\n# an edit\n")
     report.make_report(fake, only="alpha")
+    assert "**Stale**" not in (fake / "REPORT.md").read_text()
+    source.write_text(source.read_text() + "\nEDITED = 1\n")
+    report.make_report(fake, only="alpha")
     text = (fake / "REPORT.md").read_text()
     beta = text[text.index("## Study beta"):]
-    assert "**Stale**" in beta and "--only beta" in beta
+    assert "**Stale**" in beta and f"soilwater report --only beta --out {fake}`" in beta
+    assert "fake_beta/report.py" in beta
     assert "**Stale**" not in text[:text.index("## Study beta")]
 
 
-def test_a_change_to_a_solver_marks_stale_only_the_sections_that_used_it(fake, tmp_path,
-                                                                         monkeypatch):
-    package = tmp_path / "package"
-    for path in ("efg/weights.py", "fem/spaces.py", "case/model.py",
-                 "studies/harness/tables.py"):
-        (package / path).parent.mkdir(parents=True, exist_ok=True)
-        (package / path).write_text("x = 1\n")
-    monkeypatch.setattr(store, "PACKAGE", package)
+@pytest.fixture
+def package(tmp_path, monkeypatch):
+    """A copy of the package's sources that the source hashes read instead of the real
+    one (the studies still import the real package)."""
+    copy = tmp_path / "package"
+    shutil.copytree(sources.PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(sources, "PACKAGE", copy)
+    return copy
+
+
+def edit(path):
+    """A change of code (not of a comment) at the end of ``path``."""
+    path.write_text(path.read_text() + "\n_EDITED = 1\n")
+
+
+def test_a_change_to_a_solver_marks_stale_only_the_sections_that_used_it(fake, package):
     alpha = Path(registry.STUDIES["alpha"].load().__file__)
     alpha.write_text(alpha.read_text() + "\nimport soilwater.efg.weights\n")
     report.make_report(fake)
     assert store.load(fake, "alpha").meta["solvers"] == ["efg"]
-    (package / "fem/spaces.py").write_text("x = 2\n")
+    edit(package / "fem" / "solver.py")
     report.make_report(fake, only="beta")
     assert "**Stale**" not in (fake / "REPORT.md").read_text()
-    (package / "efg/weights.py").write_text("x = 2\n")
+    edit(package / "efg" / "weights.py")
     report.make_report(fake, only="beta")
     text = (fake / "REPORT.md").read_text()
     assert "**Stale**" in text[:text.index("## Study beta")]
+    assert "`efg/weights.py`" in text[:text.index("## Study beta")]
     assert "**Stale**" not in text[text.index("## Study beta"):]
-    (package / "case/model.py").write_text("x = 2\n")
+    edit(package / "case" / "model.py")
     report.make_report(fake, only="alpha")
     text = (fake / "REPORT.md").read_text()
     assert "**Stale**" in text[text.index("## Study beta"):]
+    assert "**Stale**" not in text[:text.index("## Study beta")]
 
 
 def test_a_study_not_run_yet_says_so(fake):
@@ -222,7 +243,8 @@ def test_a_section_older_code_saved_asks_for_a_rerun_and_todays_errors_raise():
     def broken():
         raise KeyError("method")
 
-    lines = _readable(broken, False, "## footing", "section `footing`", "footing")
+    lines = _readable(broken, False, "## footing", "section `footing`",
+                     "soilwater report --only footing")
     assert lines[0] == "## footing"
     assert "rerun `soilwater report --only footing`" in lines[2]
     assert _readable(lambda: ["ok"], False, "## x", "x", "x") == ["ok"]

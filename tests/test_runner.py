@@ -74,29 +74,36 @@ def test_a_method_s_settings_do_not_key_the_other_methods_runs():
 
 
 def test_a_change_to_one_solver_keeps_the_other_solvers_runs(tmp_path, monkeypatch):
-    """The cache key hashes only the sources a method depends on: editing ``efg/``
+    """The cache key hashes only the code a method's solver can run: editing ``efg/``
     changes EFG's keys and not FEM's; editing the shared library changes both; editing a
-    study changes neither."""
-    import soilwater.studies.harness.runner as runner
+    study, or a comment, changes neither."""
+    import shutil
 
-    for folder in ("physics", "efg", "fem", "studies"):
-        (tmp_path / folder).mkdir()
-        (tmp_path / folder / "a.py").write_text(f"# {folder}\n")
-    monkeypatch.setattr(runner, "PACKAGE", tmp_path)
+    import soilwater.studies.harness.runner as runner
+    from soilwater.studies.harness import sources
+
+    copy = tmp_path / "package"
+    shutil.copytree(sources.PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(sources, "PACKAGE", copy)
     efg, fem = Job("soil-column", "efg"), Job("soil-column", "fem-th")
 
     def keys():
         runner.code_version.cache_clear()
         return efg.key(), fem.key()
 
+    def append(path, text):
+        path.write_text(path.read_text() + text)
+
     first = keys()
-    (tmp_path / "efg" / "a.py").write_text("# efg, edited\n")
+    append(copy / "efg" / "solver.py", "\n_EDITED = 1\n")
     second = keys()
     assert second[0] != first[0] and second[1] == first[1]
-    (tmp_path / "physics" / "a.py").write_text("# physics, edited\n")
+    append(copy / "physics" / "weakform.py", "\n# a comment only\n")
+    assert keys() == second
+    append(copy / "physics" / "weakform.py", "\n_EDITED = 1\n")
     third = keys()
     assert third[0] != second[0] and third[1] != second[1]
-    (tmp_path / "studies" / "a.py").write_text("# a study, edited\n")
+    append(copy / "studies" / "footing" / "study.py", "\n_EDITED = 1\n")
     assert keys() == third
     runner.code_version.cache_clear()
 

@@ -3,13 +3,16 @@ those of ``--only``) and assemble ``reports/REPORT.md`` from every study's last 
 
 Each study writes its tables under ``root/tables`` and figures under ``root/figures``
 and saves the numbers of its section under ``root/studies``
-(:mod:`soilwater.studies.harness.study`). REPORT.md states under each section the
-code it was made from and marks it stale when the sources it depends on have changed
-since; a study never run says so in place of its section.
+(:mod:`soilwater.studies.harness.study`). REPORT.md states at its top the command,
+date and source hash it was assembled with, under each section the code it was made from,
+and marks a section stale when code it could execute has changed since (not comments or
+docstrings: :mod:`soilwater.studies.harness.sources`); a study never run says so in place
+of its section.
 """
 
 import os
 import sys
+import time
 from pathlib import Path
 
 from tqdm import tqdm
@@ -18,7 +21,7 @@ from soilwater.errors import SoilwaterError
 from soilwater.nonlinear.progress import _isatty, clock
 from soilwater.studies import registry, verdicts
 from soilwater.studies.harness import quick as _quick
-from soilwater.studies.harness import runner
+from soilwater.studies.harness import runner, sources
 from soilwater.studies.harness import study as store
 
 
@@ -45,7 +48,7 @@ def select(only):
     return [name for name in registry.STUDIES if name in names]
 
 
-def make_report(root="reports", only=None, redraw=False):
+def make_report(root="reports", only=None, redraw=False, what="folder"):
     """Run the studies (all, or ``only``: ``"NAME[,NAME]"``) into ``root`` and write
     ``root/REPORT.md`` from every study's last saved output; returns the paths of the
     saved outputs and REPORT.md.
@@ -59,12 +62,15 @@ def make_report(root="reports", only=None, redraw=False):
     redraw : bool
         Run no study: redraw the figures of the selected studies from their saved outputs
         (those whose report module has ``figures(root, data)``) and rebuild REPORT.md.
+    what : str
+        How ``root`` is named in a refusal (``"--out"`` from the command).
 
     Raises
     ------
     SoilwaterError
-        For an unknown study, a study whose needed study has no saved output, or a folder
-        holding the other resolution's report.
+        For an unknown study, a study whose needed study has no saved output, a folder
+        holding the other resolution's report, or a folder that is not new, empty or a
+        report soilwater wrote (:func:`soilwater.targets.check_report_folder`).
 
     Notes
     -----
@@ -75,9 +81,13 @@ def make_report(root="reports", only=None, redraw=False):
     """
     import matplotlib
 
+    from soilwater.targets import check_report_folder, mark_report_folder
+
     matplotlib.use("Agg")               # the studies write PNGs, never show them
-    root = Path(root)
     names = select(only)
+    shown = root
+    root = check_report_folder(root, what)
+    mark_report_folder(root)
     for sub in ("tables", "figures"):
         (root / sub).mkdir(parents=True, exist_ok=True)
     studies = registry.STUDIES
@@ -103,9 +113,11 @@ def make_report(root="reports", only=None, redraw=False):
         saved[name] = store.run(study, root, {n: saved[n].data for n in study.needs},
                                 studies, settings)
     plan.close()
-    text = markdown(saved, {name: store.inputs_hash(s, studies, store.solvers(saved[name]))
-                            for name, s in studies.items() if saved[name] is not None},
-                    quick)
+    made = {"command": command(shown, only, redraw, quick), "source": sources.package_hash(),
+            "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+            "rerun": rerun_hint(shown, quick)}
+    stale = {name: store.changed(s) for name, s in saved.items() if s is not None}
+    text = markdown(saved, stale, made, quick)
     (root / "REPORT.md").write_text(text)
     return [p for name in names for p in store.paths(root, name)] + [root / "REPORT.md"]
 
@@ -159,31 +171,54 @@ class Plan:
             self.bar.close()
 
 
+def command(root, only, redraw, quick):
+    """The ``soilwater report`` command line that makes ``root`` this way."""
+    return " ".join(["soilwater report", *(["--quick"] if quick else []),
+                     *([f"--only {only}"] if only else []), *(["--redraw"] if redraw else []),
+                     *([] if _default(root, quick) else [f"--out {root}"])])
+
+
+def rerun_hint(root, quick):
+    """The command that reruns one study of ``root``, ``{name}`` left to fill."""
+    return " ".join(["soilwater report", *(["--quick"] if quick else []), "--only {name}",
+                     *([] if _default(root, quick) else [f"--out {root}"])])
+
+
+def _default(root, quick):
+    return Path(root) == Path(QUICK_FOLDER if quick else "reports")
+
+
 def _linear_solver():
     from soilwater.linalg.backends import identity
 
     return identity()
 
 
-def provenance(name, saved, today):
-    """The line under a section: the code it was made from, or **stale** when ``today``'s
-    source hash differs from the recorded one."""
+def provenance(name, saved, changed, rerun="soilwater report --only {name}"):
+    """The line under a section: the code it was made from, or **Stale** naming the
+    sources (``changed``: paths in the package) that changed since, and the command that
+    reruns it (``rerun``, ``{name}`` filled in)."""
     meta = saved.meta
-    if meta["code"] != today:
+    if changed:
+        shown = ", ".join(f"`{p}`" for p in changed[:3]) + (
+            f" and {len(changed) - 3} more" if len(changed) > 3 else "")
         return (f"**Stale**: section `{name}` was made from code `{meta['code'][:7]}` on "
-                f"{meta['made']}; the sources it depends on have changed since "
-                f"(`{today[:7]}`): rerun `soilwater report --only {name}`.")
+                f"{meta['made']}; code it runs has changed since ({shown}): rerun "
+                f"`{rerun.format(name=name)}`.")
     solvers = ", ".join(f"`{s}/`" for s in meta.get("solvers", ())) or "no solver"
-    return (f"*Section `{name}`: made from code `{meta['code'][:7]}` (shared library, "
-            f"{solvers}, its study) on {meta['made']} in {meta['seconds']:.0f} s.*")
+    return (f"*Section `{name}`: made from code `{meta['code'][:7]}` (its "
+            f"{len(meta['modules'])} modules and data files: shared library, {solvers}, its "
+            f"study) on {meta['made']} in {meta['seconds']:.0f} s.*")
 
 
-def markdown(saved, hashes, quick=False):
+def markdown(saved, stale, made, quick=False):
     """REPORT.md from the saved outputs (name -> :class:`~soilwater.studies.harness.
-    study.Saved` or None) and today's source hashes of the saved ones (name -> hash over
-    the solvers each used); ``quick``: a quick report's, labelled so at its top and under
-    each section."""
-    lines = _header(saved, quick)
+    study.Saved` or None), the sources changed since each saved one was made (name ->
+    list of paths, :func:`soilwater.studies.harness.study.changed`) and how this report
+    was assembled (``made``: ``command``, ``source`` hash, ``date``, ``rerun`` hint);
+    ``quick``: a quick report's, labelled so at its top and under each section."""
+    rerun = made["rerun"]
+    lines = _header(saved, made, quick)
     if quick:
         lines[1:1] = ["", f"**{_quick.LABEL}.** Its numbers come from coarser runs than "
                       "the full report states: read them as a first look, not as the "
@@ -191,22 +226,22 @@ def markdown(saved, hashes, quick=False):
     for name, study in registry.STUDIES.items():
         if saved[name] is None:
             lines += [f"## {name}", "", f"*Study `{name}` has not been run yet: "
-                      f"`soilwater report --only {name}`.*", ""]
+                      f"`{rerun.format(name=name)}`.*", ""]
             continue
-        fresh = saved[name].meta["code"] == hashes[name]
-        lines += [*_readable(lambda: study.load().section(saved[name].data), fresh,
-                             f"## {name}", f"section `{name}`", name),
-                  provenance(name, saved[name], hashes[name]), ""]
+        lines += [*_readable(lambda: study.load().section(saved[name].data),
+                             not stale[name], f"## {name}", f"section `{name}`",
+                             rerun.format(name=name)),
+                  provenance(name, saved[name], stale[name], rerun), ""]
         if quick:
             lines[-1:-1] = [f"*{_quick.LABEL}.*"]
-    stale = [n for n in verdicts.NEEDS
-             if saved.get(n) is not None and saved[n].meta["code"] != hashes[n]]
+    old = [n for n in verdicts.NEEDS if saved.get(n) is not None and stale[n]]
     lines += _readable(
         lambda: verdicts.section({n: s.data for n, s in saved.items() if s is not None}),
-        not stale, "## Verdicts on the paper's claims", "the verdicts", ",".join(stale))
-    if stale:
+        not old, "## Verdicts on the paper's claims", "the verdicts",
+        rerun.format(name=",".join(old)))
+    if old:
         lines += [f"**Stale**: the verdicts read sections made from older code "
-                  f"({', '.join(stale)}).", ""]
+                  f"({', '.join(old)}).", ""]
     return "\n".join(lines + DIFFERENCES)
 
 
@@ -220,16 +255,17 @@ def _readable(render, fresh, title, what, rerun):
         return render()
     except (KeyError, IndexError, ValueError, AttributeError, TypeError):
         return [title, "", f"*{what.capitalize()} cannot be written from output saved by "
-                f"older code: rerun `soilwater report --only {rerun}`.*", ""]
+                f"older code: rerun `{rerun}`.*", ""]
 
 
-def _header(saved, quick):
-    """The report's title and how it was made: wall time and cached runs summed over the
-    saved studies, on the cores their runs recorded."""
-    made = [s.meta for s in saved.values() if s is not None]
-    seconds = sum(m["seconds"] for m in made)
-    runs, cached = sum(m["runs"] for m in made), sum(m["cached"] for m in made)
-    cores = "/".join(str(c) for c in sorted({m["settings"]["cores"] for m in made})) or str(
+def _header(saved, made, quick):
+    """The report's title and how it was made: the command, date and source hash of this
+    assembly; wall time and cached runs summed over the saved studies, on the cores their
+    runs recorded."""
+    metas = [s.meta for s in saved.values() if s is not None]
+    seconds = sum(m["seconds"] for m in metas)
+    runs, cached = sum(m["runs"] for m in metas), sum(m["cached"] for m in metas)
+    cores = "/".join(str(c) for c in sorted({m["settings"]["cores"] for m in metas})) or str(
         os.cpu_count())
     footing = saved.get("footing")
     cost = ("; from an empty cache the report takes far longer: the strip-footing "
@@ -239,12 +275,14 @@ def _header(saved, quick):
     return [
         "# soilwater report" + (" (quick)" if quick else ""),
         "",
-        f"Regenerated by `make report{'-quick' if quick else ''}` (one study: `soilwater "
-        f"report --only NAME`), its sections in {seconds:.0f} s on this machine ({cores} "
-        f"cores) when last run, {cached} of {runs} solver runs read from the run cache "
-        "(keyed by case, method, linear solver and solver source, so only what changed is "
-        f"recomputed{cost}). Every number below comes from the run stated under its "
-        "section; tables are under `tables/`, figures under `figures/`.",
+        f"Assembled by `{made['command']}` on {made['date']} from source `{made['source']}` "
+        f"(one study: `{made['rerun'].format(name='NAME')}`). Its sections took "
+        f"{seconds:.0f} s on this machine ({cores} cores) when last run, {cached} of "
+        f"{runs} solver runs read from the run cache (keyed by case, method, linear solver "
+        f"and the code the solver runs, so only what changed is recomputed{cost}). Every "
+        "number below comes from the run stated under its section, made from the code it "
+        "names; a section whose code changed since is marked stale. Tables are under "
+        "`tables/`, figures under `figures/`.",
         "",
     ]
 

@@ -9,8 +9,9 @@ in order. A job that fails is an outcome with its error; the others complete.
 
 Results are cached on disk under a key hashing the resolved case, the method, the linear
 solver (name and version, :func:`soilwater.linalg.backends.identity`) and the source code
-the method's solver is made of (:func:`code_version`: the library outside ``studies/``,
-with ``efg/`` for EFG and ``fem/`` for the FEM pairs; a change there invalidates it):
+the method's solver can execute (:func:`code_version`: the modules its solver imports,
+with ``efg/`` for EFG and ``fem/`` for the FEM pairs; a change of code there, not of
+comments or docstrings, invalidates it):
 rerunning a report only recomputes what changed, and a result made with one linear solver
 is never reused for another.
 """
@@ -32,7 +33,8 @@ from soilwater.fem.spaces import PAIRS
 from soilwater.linalg.backends import identity, linear_solver
 from soilwater.methods import EFG_METHODS, solver
 
-from soilwater.studies.harness.paths import PACKAGE, cache_folder
+from soilwater.studies.harness import sources
+from soilwater.studies.harness.paths import cache_folder
 from soilwater.studies.harness.progress import Sweep, record, recorded
 
 #: Scheduler address for every sweep of this process (``--dask ADDRESS``), or None.
@@ -91,10 +93,8 @@ class Outcome:
         return self.error is None
 
 
-#: The package folders a method's solver is made of, besides the shared library (every
-#: module outside ``efg/``, ``fem/`` and ``studies/``).
+#: The solver folder each method runs (its code and what it imports make its cache key).
 SOURCES = {**{name: ("efg",) for name in EFG_METHODS}, **{name: ("fem",) for name in PAIRS}}
-_APART = ("efg", "fem", "studies")
 
 
 #: ``cache_dir`` of :func:`run` and :func:`execute` by default: the cache folder of
@@ -261,15 +261,14 @@ def table(outcomes):
 
 @cache
 def code_version(method):
-    """Hash of the package version and the source files ``method`` depends on
-    (:data:`SOURCES`): a change to EFG's code leaves FEM's cached runs valid, and the
-    reverse."""
+    """Hash of the package version and the code ``method``'s runs can execute
+    (:func:`soilwater.studies.harness.sources.dependencies` of its solver, :data:`SOURCES`):
+    a change to EFG's code leaves FEM's cached runs valid, and the reverse; a change of
+    comments or docstrings leaves both."""
     from importlib.metadata import version
 
-    digest = hashlib.sha256(version("soilwater").encode())
-    shared = [path for path in sorted(PACKAGE.rglob("*.py"))
-              if path.relative_to(PACKAGE).parts[0] not in _APART]
-    own = [path for folder in SOURCES[method] for path in sorted((PACKAGE / folder).rglob("*.py"))]
-    for path in shared + own:
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:16]
+    folders = SOURCES[method]
+    roots = ["soilwater.methods", *(f"soilwater.{f}.{m}" for f in folders
+                                     for m in ("solver", "statics"))]
+    return sources.digest({"version": version("soilwater"),
+                           **sources.dependencies(roots, folders)})

@@ -10,14 +10,13 @@ A study is a module (``soilwater.studies.<folder>.report``) with
 * ``section(data) -> list of str``: its REPORT.md lines from those numbers.
 
 :func:`save` keeps what ``run`` returned under ``root/studies/NAME.pkl`` beside
-``NAME.json``: the hash of the sources it was made from (:func:`source_hash`), the
-settings, the wall time and the solver runs it made and read from the cache.
-:func:`load` reads them back, so REPORT.md can be rebuilt from every study's last
-outputs while only some studies are rerun, and a section whose sources changed since is
-marked stale.
+``NAME.json``: the code hash of every module it could execute and their digest
+(:func:`dependencies`), the settings, the wall time and the solver runs it made and read
+from the cache. :func:`load` reads them back, so REPORT.md can be rebuilt from every
+study's last outputs while only some studies are rerun, and a section whose code changed
+since (:func:`changed`; not its comments or docstrings) is marked stale.
 """
 
-import hashlib
 import json
 import os
 import pickle
@@ -26,13 +25,10 @@ from dataclasses import dataclass
 from importlib import import_module
 from pathlib import Path
 
-from soilwater.studies.harness import runner
-from soilwater.studies.harness.paths import PACKAGE
+from soilwater.studies.harness import runner, sources
 
-#: Package folders that are not the shared library: the solvers, each a study's input
-#: only if it runs or imports them, and the studies.
-_SOLVERS = ("efg", "fem")
-_APART = (*_SOLVERS, "studies")
+#: The solver folders: each a study's input only if it runs or imports them.
+_SOLVERS = sources.SOLVERS
 
 
 @dataclass(frozen=True)
@@ -67,34 +63,21 @@ class Saved:
     meta: dict
 
 
-def source_hash(folders, solvers=_SOLVERS):
-    """Hash of the shared library sources (every ``.py``, ``.toml`` and built-in mesh of
-    the package outside ``efg/``, ``fem/`` and ``studies/``), the ``solvers`` folders, the
-    study harness and ``folders``: 16 hex digits.
-
-    A change to the material, the built-in cases, the harness, one of ``solvers`` or a
-    study's own folder changes it; a change to another solver or to another study's folder
-    does not.
-    """
-    digest = hashlib.sha256()
-    library = [(PACKAGE, p) for p in sorted(PACKAGE.rglob("*"))
-               if p.suffix in (".py", ".toml", ".msh", ".geo")
-               and (p.relative_to(PACKAGE).parts[0] not in _APART
-                    or p.relative_to(PACKAGE).parts[0] in solvers)]
-    own = [(Path(folder), p) for folder in (PACKAGE / "studies" / "harness", *folders)
-           for p in sorted(Path(folder).rglob("*.py"))]
-    for top, path in library + own:
-        digest.update(path.relative_to(top).as_posix().encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:16]
+def dependencies(study, registry, solvers=_SOLVERS):
+    """``{path: code hash}`` of what ``study`` is made of: the modules its own module,
+    those of the studies it needs and the ``solvers`` it used can import, and the
+    library's data files (:func:`soilwater.studies.harness.sources.dependencies`)."""
+    roots = [study.module, *(registry[n].module for n in study.needs),
+             *(f"soilwater.{s}.{m}" for s in solvers for m in ("solver", "statics"))]
+    return sources.dependencies(roots, solvers)
 
 
-def inputs_hash(study, registry, solvers=_SOLVERS):
-    """The source hash of ``study``: the shared library, the ``solvers`` folders it used,
-    its own folder and the folders of the studies it needs (``registry``: name ->
-    :class:`Study`)."""
-    folders = [study.folder] + [registry[n].folder for n in study.needs]
-    return source_hash(folders, solvers)
+def changed(saved):
+    """The sources of a saved output that changed since it was made (paths relative to
+    the package, sorted); all of them (``["(not recorded)"]``) for output that did not
+    record its sources."""
+    modules = saved.meta.get("modules")
+    return ["(not recorded)"] if modules is None else sources.changed(modules)
 
 
 def imported_solvers(study, registry):
@@ -103,11 +86,6 @@ def imported_solvers(study, registry):
     folders = [study.folder] + [registry[n].folder for n in study.needs]
     text = "".join(p.read_text() for folder in folders for p in Path(folder).rglob("*.py"))
     return {name for name in _SOLVERS if f"soilwater.{name}" in text}
-
-
-def solvers(saved):
-    """The solver folders a saved output depends on (both when it does not say)."""
-    return tuple(saved.meta.get("solvers", _SOLVERS))
 
 
 def paths(root, name):
@@ -145,15 +123,16 @@ def run(study, root, inputs, registry, settings):
     """Run ``study`` into ``root``, save its data and return the :class:`Saved`.
 
     Its meta records the solver folders it used (those of the runner's jobs and those its
-    sources import) and the source hash over them (:func:`inputs_hash`); its runs and
-    cached runs are its share of the runner's tally.
+    sources import), the code hash of every module it could execute (:func:`dependencies`)
+    and their digest; its runs and cached runs are its share of the runner's tally.
     """
     counts, before = runner.COUNTS, dict(runner.COUNTS)
     runner.USED.clear()
     tic = time.perf_counter()
     data = study.load().run(Path(root), inputs)
     used = sorted(runner.USED | imported_solvers(study, registry))
-    meta = {"code": inputs_hash(study, registry, used), "solvers": used,
+    modules = dependencies(study, registry, used)
+    meta = {"code": sources.digest(modules), "modules": modules, "solvers": used,
             "settings": settings,
             "seconds": round(time.perf_counter() - tic, 1),
             "runs": counts["runs"] - before["runs"],
