@@ -168,11 +168,25 @@ def test_a_second_run_replaces_the_first_result(tmp_path, monkeypatch):
     out.mkdir()  # an empty folder is accepted
     args = ["run", "patch-test", "--method", "efg", "--out", str(out)]
     assert main(args) == 0 and (out / MARKER).is_file()
-    (out / "fields_0099.vtu").write_text("left by an older run")
     assert main(args + ["--set", "discretisation.nx=5"]) == 0
-    assert (out / MARKER).is_file() and not (out / "fields_0099.vtu").exists()
-    assert '"nx": 5' in (out / "summary.json").read_text()
+    assert (out / MARKER).is_file() and '"nx": 5' in (out / "summary.json").read_text()
     assert [p.name for p in tmp_path.iterdir()] == ["run"]
+
+
+def test_run_refuses_a_previous_result_holding_the_users_files(refusing, capsys):
+    from soilwater.targets import MARKER
+
+    out = refusing / "runs" / "stab"
+    out.mkdir(parents=True)
+    (out / MARKER).write_text('{"written_by": "soilwater", "files": ["summary.json"]}\n')
+    (out / "summary.json").write_text("{}")
+    (out / "pw.png").write_bytes(b"the user's figure")
+    before = _contents(refusing)
+    assert main(["run", "patch-test", "--method", "efg", "--out", str(out)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and str(out) in lines[0]
+    assert "1 entry soilwater did not write (pw.png)" in lines[0]
+    assert _contents(refusing) == before
 
 
 def _handles_sigterm(pid):
@@ -236,7 +250,7 @@ def test_stdout_closed_early_is_silent(tmp_path):
     (OSError(errno.ENOSPC, "No space left on device", "fields_0000.vtu"), 2,
      r"soilwater: error: fields_0000\.vtu: No space left on device"),
     (PermissionError(errno.EACCES, "Permission denied"), 2,  # names no file: given one
-     r"soilwater: error: .*/\.run\.\w+\.tmp/fields_0000\.vtu: Permission denied"),
+     r"soilwater: error: .*/run/fields_0000\.vtu: Permission denied"),  # the result's
     (Interrupted(signal.SIGTERM), 143,
      r"soilwater: interrupted \(SIGTERM\): no half-written output was left"),
 ])

@@ -47,6 +47,9 @@ def main(argv=None):
             return _fail(f"error: {err}", 2)
         except KeyboardInterrupt as err:
             return _interrupted(getattr(err, "signum", signal.SIGINT))
+        except MemoryError:
+            return _fail("error: out of memory: this machine cannot hold the problem; "
+                         "make it smaller (fewer nodes, sizes or steps)", 2)
         except BrokenPipeError:
             # the Python documentation's recipe: no second error at interpreter exit
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
@@ -157,7 +160,8 @@ def _parser():
                        description="Solve a case (built-in name or TOML file) and write "
                        "DIR/summary.json, DIR/history.csv and DIR/fields.pvd with VTU files. "
                        "DIR must be new, empty or a previous result (it holds "
-                       f"{MARKER}); it is replaced only when the run succeeds.")
+                       f"{MARKER}) holding nothing else; it is replaced only when the run "
+                       "succeeds, and a second run on DIR is refused while one writes it.")
     _case_arguments(p)
     p.add_argument("--method", required=True, choices=list(METHODS), help="solver")
     p.add_argument("--out", required=True, metavar="DIR",
@@ -266,12 +270,12 @@ def _show(args):
 def _run(args):
     from soilwater.case.loader import load_case
     from soilwater.methods import solve
-    from soilwater.targets import check_output_folder
+    from soilwater.targets import claim
 
-    check_output_folder(args.out)  # before any work: a bad --out fails at once
-    case = load_case(args.case, args.set)
-    result = solve(case, args.method, progress=not args.quiet)
-    result.write(args.out)
+    with claim(args.out, what="--out"):  # before any work; held until written
+        case = load_case(args.case, args.set)
+        result = solve(case, args.method, progress=not args.quiet)
+        result.write(args.out, what="--out")
     print(f"wrote {args.out}: {json_line(result.summary)}")
 
 
@@ -346,7 +350,7 @@ def _report(args):
     if args.cache:
         os.environ["SOILWATER_CACHE"] = args.cache
     out = args.out or (QUICK_FOLDER if args.quick else "reports")
-    for path in make_report(out, only=args.only, redraw=args.redraw):
+    for path in make_report(out, only=args.only, redraw=args.redraw, what="--out"):
         print(f"wrote {path}")
 
 

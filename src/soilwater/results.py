@@ -4,16 +4,21 @@ A failed run must leave no half-written output and never write NaN, so every wri
 goes through a temporary file in the target folder and an atomic rename.
 
 Which targets may be written, and how a single file is, is
-:mod:`soilwater.targets`'s: a result folder holds its marker file and replaces only a
-folder that does.
+:mod:`soilwater.targets`'s: a result folder holds its marker file, which lists its files,
+and replaces only a folder that holds that marker and nothing else, claimed by one
+process at a time.
 """
 
 import json
 import os
 import shutil
+import subprocess
+import sys
 import tempfile
+import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from importlib.metadata import version
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 import meshio
@@ -22,7 +27,7 @@ import pandas as pd
 
 from soilwater import fields
 from soilwater.errors import SoilwaterError
-from soilwater.targets import MARKER, check_output_folder, naming, publish, write_csv
+from soilwater.targets import MARKER, check_output_folder, claim, naming, publish, write_csv
 
 #: Units of the history columns (:attr:`Result.units`), in the built-in cases' kPa, m, s
 #: (a case in other units keeps its stress, length and time units); ``-`` is
@@ -129,59 +134,81 @@ class Result:
     def mesh(self, i=-1):
         """Snapshot ``i`` (the last by default) as a :class:`meshio.Mesh`, as written to
         ``fields_NNNN.vtu``: points (N, 3) [m], current configuration, z = 0; point and
-        cell data in :data:`soilwater.fields.UNITS`. Its time [s] is
-        ``result.snapshots[i].time``."""
+        cell data in :data:`soilwater.fields.UNITS`; its time [s] in
+        ``field_data["TimeValue"]`` (``result.snapshots[i].time``)."""
         return self.snapshots[i].mesh(self.case)
 
-    def write(self, folder):
+    def write(self, folder, what="folder"):
         """Write ``summary.json`` (the resolved case, every material parameter written
         out, the options, the versions of soilwater and its libraries, ``history_units``,
         the unit of each ``history.csv`` column, and ``field_units``, of each VTU
-        field), ``history.csv``, ``fields.pvd``, VTU files and :data:`MARKER` to
-        ``folder``.
+        field), ``history.csv``, ``fields.pvd``, VTU files and :data:`MARKER`, which
+        lists them, to ``folder``.
 
-        ``folder`` must pass :func:`soilwater.targets.check_output_folder`. Everything goes to a hidden
-        temporary sibling folder; only when it is complete does it take the place of
-        ``folder`` (a previous result is renamed aside, the new one renamed in, the old one
-        removed). On any failure, including KeyboardInterrupt, the temporary folder is
-        removed and ``folder`` is left as it was.
+        ``folder`` must pass :func:`soilwater.targets.check_output_folder`, when the
+        call begins and again before it is replaced, and is held by
+        :func:`soilwater.targets.claim` meanwhile. Everything goes to a hidden temporary
+        sibling folder; only when it is complete does it take the place of ``folder`` (a
+        previous result is renamed aside, the new one renamed in, the old one removed).
+        On any failure, including KeyboardInterrupt, the temporary folder is removed and
+        ``folder`` is left as it was; an error of the file system names the path in
+        ``folder``, not in the temporary one.
+
+        Parameters
+        ----------
+        folder : str or Path
+        what : str
+            How ``folder`` is named in a refusal (``"--out"`` from the command).
 
         Returns
         -------
         Path
             The resolved folder written.
+
+        Raises
+        ------
+        InputError
+            If ``folder`` is refused (:func:`soilwater.targets.claim`).
+        SoilwaterError
+            If a field holds NaN or infinity.
         """
-        folder = check_output_folder(folder)
-        with naming(folder):
-            folder.parent.mkdir(parents=True, exist_ok=True)
-            tmp = Path(tempfile.mkdtemp(dir=folder.parent, prefix=f".{folder.name}.",
-                                        suffix=".tmp"))
-        old = tmp.with_suffix(".old")
-        try:
-            publish(tmp, folder=True)
-            self._write_files(tmp)
-            check_output_folder(folder)  # again: the folder may have changed during the run
-            _swap(tmp, folder, old)
-        except BaseException:
-            shutil.rmtree(tmp, ignore_errors=True)
-            raise
-        shutil.rmtree(old, ignore_errors=True)
+        with claim(folder, what) as folder:
+            try:
+                tmp = Path(tempfile.mkdtemp(dir=folder.parent, prefix=f".{folder.name}.",
+                                            suffix=".tmp"))
+            except OSError as err:
+                err.filename = str(folder)
+                raise
+            old = tmp.with_suffix(".old")
+            try:
+                with _in_place_of(tmp, folder):
+                    publish(tmp, folder=True)
+                    self._write_files(tmp)
+                check_output_folder(folder, what)  # again: it may have changed meanwhile
+                _swap(tmp, folder, old)
+            except BaseException:
+                shutil.rmtree(tmp, ignore_errors=True)
+                raise
+            shutil.rmtree(old, ignore_errors=True)
         return folder
 
     def _write_files(self, folder):
-        marker = {"written_by": "soilwater", "version": version("soilwater"),
-                  "note": "soilwater run replaces this folder whole"}
-        with naming(folder / MARKER):
-            (folder / MARKER).write_text(json.dumps(marker) + "\n")
         write_csv(self.history, folder / "history.csv")
         summary = {"case": self.case.to_dict(), "method": self.method,
                    "options": self.options, "versions": versions(),
+                   "provenance": provenance(self.case),
                    "history_units": self.units, "field_units": fields.UNITS,
                    **self.summary}
         with naming(folder / "summary.json"):
             (folder / "summary.json").write_text(json.dumps(summary, indent=2,
                                                             default=float))
         self._write_fields(folder)
+        marker = {"written_by": "soilwater", "version": version("soilwater"),
+                  "note": "soilwater run replaces this folder whole, and only while it "
+                          "holds nothing but these files",
+                  "files": sorted(p.name for p in folder.iterdir())}
+        with naming(folder / MARKER):
+            (folder / MARKER).write_text(json.dumps(marker) + "\n")
 
     def _write_fields(self, folder):
         entries = []
@@ -201,6 +228,19 @@ class Result:
                 + "\n  </Collection>\n</VTKFile>\n")
 
 
+@contextmanager
+def _in_place_of(tmp, folder):
+    """Inside the block, an :class:`OSError` naming a path in the temporary folder
+    ``tmp`` names that path in ``folder`` instead: where the user will look."""
+    try:
+        yield
+    except OSError as err:
+        name = Path(str(err.filename or ""))
+        if name == tmp or tmp in name.parents:
+            err.filename = str(folder / name.relative_to(tmp))
+        raise
+
+
 def _swap(new, folder, old):
     """Put folder ``new`` in the place of ``folder``; a previous ``folder`` goes to ``old``.
 
@@ -217,10 +257,48 @@ def _swap(new, folder, old):
 
 
 def versions():
-    """Versions of soilwater and the libraries a result depends on."""
+    """Versions of soilwater and the libraries a result depends on (gmsh's only where it
+    is installed)."""
     import scipy
     import skfem
 
-    return {"soilwater": version("soilwater"), "numpy": np.__version__,
-            "scipy": scipy.__version__, "scikit-fem": skfem.__version__,
-            "meshio": meshio.__version__}
+    out = {"soilwater": version("soilwater"), "numpy": np.__version__,
+           "scipy": scipy.__version__, "scikit-fem": skfem.__version__,
+           "meshio": meshio.__version__}
+    try:
+        out["gmsh"] = version("gmsh")
+    except PackageNotFoundError:
+        pass
+    return out
+
+
+def provenance(case):
+    """How a result was made, for ``summary.json``: ``date`` (UTC), ``command`` (this
+    process's command line), ``source`` (the git commit of soilwater's checkout, with
+    ``-dirty`` for uncommitted changes; None for an installed copy) and, for a case on a
+    user's mesh, ``mesh``: its path, content hash (sha256), vertex and triangle counts
+    and its region names, the index of the VTU cell field ``region``."""
+    out = {"date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+           "command": " ".join(sys.argv), "source": _commit()}
+    mesh = case.geometry.mesh
+    if mesh is not None:
+        out["mesh"] = {"path": str(mesh.path), "sha256": mesh.digest,
+                       "vertices": len(mesh.points), "triangles": len(mesh.triangles),
+                       "regions": list(mesh.regions)}
+    return out
+
+
+def _commit():
+    """The git commit of the checkout soilwater runs from (``-dirty`` when its sources
+    differ), or None outside a git checkout."""
+    folder = Path(__file__).parent
+    try:
+        head = subprocess.run(["git", "-C", str(folder), "rev-parse", "HEAD"],
+                              capture_output=True, text=True, timeout=10)
+        dirty = subprocess.run(["git", "-C", str(folder), "status", "--porcelain", "."],
+                               capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    if head.returncode:
+        return None
+    return head.stdout.strip() + ("-dirty" if dirty.stdout.strip() else "")
