@@ -2,7 +2,9 @@
 meshed by gmsh, physical curves as boundary groups, every triangle method on it, and the
 one-line refusals of a mesh soilwater cannot take."""
 
+import os
 import re
+import sys
 from pathlib import Path
 
 import meshio
@@ -184,18 +186,117 @@ def test_a_mesh_with_a_hole_is_refused(tmp_path):
 
 
 def test_a_geo_file_without_gmsh_says_how_to_get_it(monkeypatch):
-    import builtins
-
-    real = builtins.__import__
-
-    def no_gmsh(name, *args, **kwargs):
-        if name == "gmsh":
-            raise ImportError(name)
-        return real(name, *args, **kwargs)
-
-    monkeypatch.setattr(builtins, "__import__", no_gmsh)
-    with pytest.raises(InputError, match=r"needs the gmsh package .*soilwater\[geometry\]"):
+    """The message is the line itself, not wrapped in a 'cannot be read' one."""
+    monkeypatch.setitem(sys.modules, "gmsh", None)
+    with pytest.raises(InputError, match=r"^geometry\.mesh = '[^']*slope\.geo' needs the "
+                                         r"gmsh package .*soilwater\[geometry\]"):
         read_mesh(DATA / "slope.geo")
+
+
+def test_a_geo_file_gmsh_cannot_mesh_gives_gmsh_s_message(tmp_path):
+    pytest.importorskip("gmsh")
+    (tmp_path / "bad.geo").write_text("Point(1) = {0, 0, 0;\n")
+    with pytest.raises(InputError, match=r"^geometry\.mesh = '[^']*bad\.geo': gmsh could "
+                                         r"not mesh it \(.*syntax error.*\): correct "
+                                         r"the geometry"):
+        read_mesh(tmp_path / "bad.geo")
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda p: p.write_bytes(b""), "is empty (0 bytes)"),
+    (lambda p: p.write_text("not a mesh\n"), "is not a gmsh mesh: write it with gmsh"),
+    (lambda p: p.write_bytes(bytes(range(256))), "is not a gmsh mesh"),
+    (lambda p: p.mkdir(), "is a folder, not a regular file"),
+    (os.mkfifo, "is a device, pipe or socket, not a regular file"),
+])
+def test_a_mesh_file_that_is_no_mesh_is_refused_in_one_line(tmp_path, make, message):
+    path = tmp_path / "broken.msh"
+    make(path)
+    with pytest.raises(InputError, match="^" + re.escape(f"geometry.mesh = {str(path)!r} "
+                                                         f"{message}")):
+        read_mesh(path)
+
+
+def test_dev_null_is_not_a_regular_file():
+    with pytest.raises(InputError, match="^" + re.escape("geometry.mesh = '/dev/null' is a "
+                                                         "device, pipe or socket, not a "
+                                                         "regular file")):
+        read_mesh("/dev/null")
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf])
+def test_a_non_finite_vertex_is_refused(tmp_path, value):
+    points = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0.5]], float)
+    points[2:4, 1] = value
+    write_msh(tmp_path / "nan.msh", points, [[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]],
+              {"outline": [[0, 1], [1, 2], [2, 3], [3, 0]]})
+    with pytest.raises(InputError, match=re.escape("geometry.mesh: 2 vertex(es) have a "
+                                                   "non-finite coordinate (NaN or "
+                                                   "infinite), the first node 3 in the "
+                                                   "file's order")):
+        read_mesh(tmp_path / "nan.msh")
+
+
+TWO_SURFACES = """Point(1) = {0, 0, 0, 0.5}; Point(2) = {1, 0, 0, 0.5};
+Point(3) = {1, 1, 0, 0.5}; Point(4) = {0, 1, 0, 0.5};
+Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};
+Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};
+Physical Curve("outline") = {1, 2, 3, 4};
+Physical Surface("soil") = {1}; Physical Surface("other") = {1};
+"""
+
+
+@pytest.mark.parametrize("source", ["msh2", "geo"])
+def test_a_triangle_in_two_physical_surfaces_is_refused(tmp_path, source):
+    """msh2 repeats such a triangle once per surface (written here by meshio: one of the
+    two triangles in both); gmsh's msh4 (what a .geo is meshed into) gives its entity both
+    surfaces, and meshio keeps only the first."""
+    if source == "geo":
+        pytest.importorskip("gmsh")
+        path, count = tmp_path / "square.geo", r"\d+"
+        path.write_text(TWO_SURFACES)
+    else:
+        path, count = tmp_path / "square.msh", "1"
+        write_msh(path, np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float),
+                  [[0, 1, 2], [0, 2, 3]], {"outline": [[0, 1], [1, 2], [2, 3], [3, 0]]},
+                  {"soil": np.array([True, True]), "other": np.array([True, False])})
+    with pytest.raises(InputError, match=rf"^geometry\.mesh: {count} triangle\(s\) belong "
+                                         r"to more than one physical surface \(soil and "
+                                         r"other\): each cell must belong to exactly one "
+                                         r"physical surface"):
+        read_mesh(path)
+
+
+def _layers(tmp_path):
+    """Two unit squares stacked (regions clay below, sand above), the interface between
+    them a physical curve of its own."""
+    points = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0, 2], [1, 2]], float)
+    write_msh(tmp_path / "layers.msh", points, [[0, 1, 2], [0, 2, 3], [3, 2, 5], [3, 5, 4]],
+              {"bottom": [[0, 1]], "right": [[1, 2], [2, 5]], "top": [[5, 4]],
+               "left": [[4, 3], [3, 0]], "interface": [[2, 3]]},
+              {"clay": np.array([True, True, False, False]),
+               "sand": np.array([False, False, True, True])})
+    return tmp_path / "layers.msh"
+
+
+def test_an_interior_physical_curve_takes_no_boundary_condition(tmp_path):
+    """A mesh may name a curve between its regions; a [boundary.NAME] on it is refused
+    as such, not as an unknown boundary group."""
+    mesh = read_mesh(_layers(tmp_path))
+    assert mesh.groups == ("bottom", "left", "right", "top")
+    assert mesh.interior == ("interface",) and mesh.regions == ("clay", "sand")
+    data = {"geometry": {"mesh": str(tmp_path / "layers.msh")},
+            "material": {"model": "elastic", "E": 1e3, "nu": 0.3},
+            "boundary": {"bottom": {"displacement": "fixed"},
+                         "left": {"displacement": "roller"}},
+            "time": {"end": 1.0, "steps": 1}}
+    assert case_from_dict(data).geometry.mesh.interior == ("interface",)
+    data["boundary"]["interface"] = {"water": "drained"}
+    with pytest.raises(InputError, match=re.escape(
+            "boundary.interface: 'interface' is an interior curve of geometry.mesh "
+            "(between regions, not on the outline), so it cannot carry a boundary "
+            "condition")):
+        case_from_dict(data)
 
 
 def test_the_resolved_case_names_the_mesh_file_and_reloads(tmp_path):

@@ -17,7 +17,7 @@ from soilwater.case.boundary import (EDGES, KINDS, SEGMENT_KINDS, SEGMENT_TOLERA
                                      Boundary, Edge, Segment)
 from soilwater.case.entries import check_keys, number, pair, section, string
 from soilwater.case.schema import KEYS, expand_displacement
-from soilwater.errors import require
+from soilwater.errors import InputError, require
 
 _RESTRAINED = ("fixed", "prescribed", "exact")
 _CORNERS = (("left", "bottom"), ("left", "top"), ("right", "bottom"), ("right", "top"))
@@ -83,7 +83,14 @@ def _require_supports(boundary, length):
 def _mesh_boundary(table, loading, mesh):
     """The boundary groups of a mesh: ``[boundary.NAME]`` for any of its physical curves
     on the boundary, the others free, impermeable and unloaded; no segments, no rigid
-    plate; supported along x, y and against rotation."""
+    plate; supported along x, y and against rotation. A physical curve inside the domain
+    (:attr:`~soilwater.geometry.mesh.Mesh.interior`) takes no ``[boundary.NAME]``."""
+    inner = [name for name in table if name in mesh.interior]
+    if inner:
+        raise InputError(f"boundary.{inner[0]}: {inner[0]!r} is an interior curve of "
+                         "geometry.mesh (between regions, not on the outline), so it "
+                         f"cannot carry a boundary condition: remove [boundary.{inner[0]}] "
+                         f"(the boundary groups are {', '.join(mesh.groups)})")
     check_keys(table, mesh.groups, "boundary", "boundary group (physical curve of "
                "geometry.mesh)")
     ends = mesh.points[np.stack([mesh.loop, np.roll(mesh.loop, -1)])]

@@ -9,7 +9,8 @@ mid-sides added by scikit-fem).
 
 Conventions: coordinates [m] in the x-y plane, y up, the bounding box's lower-left corner
 at the origin (as for the rectangle); one boundary loop (no holes); every boundary facet
-in exactly one physical curve.
+in exactly one physical curve, every triangle in at most one physical surface. Physical
+curves inside the domain (between regions) are allowed and carry no boundary condition.
 """
 
 import os
@@ -49,6 +50,9 @@ class Mesh:
         Index into :attr:`groups` of each boundary facet.
     groups : tuple of str
         Names of the physical curves on the boundary.
+    interior : tuple of str
+        Names of the physical curves inside the domain (on no boundary facet): known to
+        the mesh, but no boundary group.
     """
 
     path: str
@@ -59,6 +63,7 @@ class Mesh:
     loop: np.ndarray
     group: np.ndarray
     groups: tuple
+    interior: tuple
 
     def __eq__(self, other):
         return isinstance(other, Mesh) and self.digest == other.digest
@@ -166,23 +171,33 @@ def read_mesh(path, where="geometry.mesh"):
     Raises
     ------
     InputError
-        One line naming ``where`` and the fix: a missing or unreadable file, a ``.geo``
-        without the gmsh package, elements other than triangles, a domain off the origin
-        or with holes, a boundary facet in no physical curve, no physical curve at all.
+        One line naming ``where`` and the fix: a missing path, one that is no regular
+        file (a folder, a pipe, a device), an empty file, a ``.msh`` that is not a gmsh
+        mesh, a ``.geo`` without the gmsh package or that gmsh cannot mesh, a non-finite
+        vertex coordinate, elements other than triangles, a triangle in two physical
+        surfaces, a domain off the origin or with holes, a boundary facet in no physical
+        curve, no physical curve at all.
     """
     import meshio
 
     path = Path(path)
-    require(path.suffix in SUFFIXES, f"{where} = {str(path)!r}: give a gmsh mesh (.msh) "
-            "or geometry (.geo)")
-    require(path.is_file(), f"{where} = {str(path)!r} does not exist (a relative path is "
-            "read from the case file's folder)")
-    try:
-        raw = (_gmsh(path, where) if path.suffix == ".geo"
-               else meshio.read(path, file_format="gmsh"))
-    except (meshio.ReadError, ValueError, KeyError, IndexError) as err:
-        raise InputError(f"{where} = {str(path)!r} cannot be read as a gmsh mesh ({err}): "
-                         "write it with gmsh (-format msh4 or msh2)") from None
+    name = f"{where} = {str(path)!r}"
+    require(path.exists(), f"{name} does not exist (a relative path is read from the case "
+            "file's folder)")
+    kind = "a folder" if path.is_dir() else "a device, pipe or socket"
+    require(path.is_file(), f"{name} is {kind}, not a regular file: give the path of a "
+            "gmsh mesh (.msh) or geometry (.geo) file")
+    require(path.suffix in SUFFIXES, f"{name}: give a gmsh mesh (.msh) or geometry (.geo)")
+    require(path.stat().st_size > 0, f"{name} is empty (0 bytes): give a mesh written by "
+            "gmsh (gmsh -2 -format msh4) or a gmsh geometry (.geo)")
+    if path.suffix == ".geo":
+        raw = _gmsh(path, where)
+    else:
+        try:
+            raw = meshio.gmsh.read(path)
+        except (meshio.ReadError, ValueError, KeyError, IndexError) as err:
+            raise InputError(f"{name} is not a gmsh mesh{f' ({err})' if str(err) else ''}"
+                             ": write it with gmsh (-format msh4 or msh2)") from None
     return _mesh(raw, str(path.resolve()), where)
 
 
@@ -206,7 +221,8 @@ def _gmsh(path, where):
         gmsh.write(target)
         return meshio.read(target, file_format="gmsh")
     except Exception as err:  # gmsh raises plain Exception with its own message
-        raise InputError(f"{where} = {str(path)!r}: gmsh could not mesh it ({err})") from None
+        raise InputError(f"{where} = {str(path)!r}: gmsh could not mesh it ({err}): correct "
+                         f"the geometry (gmsh {path.name} shows it)") from None
     finally:
         gmsh.finalize()
         os.unlink(target)
@@ -218,16 +234,20 @@ def _mesh(raw, path, where):
     require(not kinds, f"{where}: the mesh holds {', '.join(sorted(kinds))} elements: "
             "soilwater takes 3-node triangles (and 2-node lines on the boundary): mesh "
             "with Mesh.ElementOrder = 1 and without recombination")
+    bad = np.flatnonzero(~np.isfinite(raw.points).all(axis=1))
+    if len(bad):
+        raise InputError(f"{where}: {len(bad)} vertex(es) have a non-finite coordinate (NaN "
+                         f"or infinite), the first node {bad[0] + 1} in the file's order: "
+                         "remesh the geometry with gmsh")
     require(np.allclose(raw.points[:, 2:], 0.0), f"{where}: the mesh is not in the x-y "
             "plane (z != 0): give a 2-D mesh")
     names = {int(tag): name for name, (tag, dim) in raw.field_data.items()}
     dims = {int(tag): int(dim) for _, (tag, dim) in raw.field_data.items()}
     tags = raw.cell_data.get("gmsh:physical", [np.zeros(len(b.data), int)
                                                for b in raw.cells])
-    tri = [(b.data, t) for b, t in zip(raw.cells, tags) if b.type == "triangle"]
-    require(tri, f"{where}: the mesh has no triangles: mesh the surfaces (gmsh -2)")
-    triangles = np.concatenate([d for d, _ in tri]).astype(np.int64)
-    surface = np.concatenate([t for _, t in tri]).astype(int)
+    require(any(b.type == "triangle" for b in raw.cells), f"{where}: the mesh has no "
+            "triangles: mesh the surfaces (gmsh -2)")
+    triangles, surface = _cells(raw, tags, names, where)
     used, triangles = np.unique(triangles, return_inverse=True)
     triangles = triangles.reshape(-1, 3)
     points = raw.points[used, :2].astype(float)
@@ -245,8 +265,43 @@ def _mesh(raw, path, where):
     loop = _loop(triangles, points, where)
     surfaces, region = np.unique(surface, return_inverse=True)
     regions = tuple(names.get(int(t), "domain") for t in surfaces)
-    group, groups = _groups(raw, tags, names, dims, used, loop, points, where)
-    return Mesh(path, points, triangles, region, regions, loop, group, groups)
+    group, groups, interior = _groups(raw, tags, names, dims, used, loop, points, where)
+    return Mesh(path, points, triangles, region, regions, loop, group, groups, interior)
+
+
+def _cells(raw, tags, names, where):
+    """Each triangle of ``raw`` once, in file order, and the tag of its physical surface.
+
+    A triangle in several physical surfaces is listed once per surface in the msh2
+    format, and once with its entity's first surface in msh4 (the others then hold its
+    block in ``raw.cell_sets``): either way it is refused.
+
+    Returns
+    -------
+    triangles : ndarray of int, shape (T, 3)
+    surface : ndarray of int, shape (T,)
+    """
+    blocks = [k for k, b in enumerate(raw.cells) if b.type == "triangle"]
+    surfaces = {name: tag for name, (tag, dim) in raw.field_data.items() if dim == 2}
+    pairs = [(raw.cells[k].data, tags[k]) for k in blocks]
+    pairs += [(raw.cells[k].data[raw.cell_sets[name][k]],
+               np.full(len(raw.cell_sets[name][k]), tag))
+              for name, tag in surfaces.items() if name in raw.cell_sets for k in blocks]
+    triangles = np.concatenate([d for d, _ in pairs]).astype(np.int64)
+    surface = np.concatenate([t for _, t in pairs]).astype(int)
+    _, first, cell = np.unique(np.sort(triangles, axis=1), axis=0, return_index=True,
+                               return_inverse=True)
+    member = np.unique(np.column_stack([cell.ravel(), surface]), axis=0)
+    shared = np.flatnonzero(np.bincount(member[:, 0]) > 1)
+    if len(shared):
+        owners = [names.get(int(t), f"tag {t}")
+                  for t in member[member[:, 0] == shared[0], 1].tolist()]
+        raise InputError(f"{where}: {len(shared)} triangle(s) belong to more than one "
+                         f"physical surface ({' and '.join(owners)}): each cell must belong "
+                         "to exactly one physical surface: keep each surface in one "
+                         "Physical Surface only")
+    first = np.sort(first)
+    return triangles[first], surface[first]
 
 
 def _loop(triangles, points, where):
@@ -271,7 +326,9 @@ def _loop(triangles, points, where):
 
 
 def _groups(raw, tags, names, dims, used, loop, points, where):
-    """The boundary group of every facet of ``loop``, from the physical curves."""
+    """The boundary group of every facet of ``loop`` and the names of the boundary groups,
+    from the physical curves; and the names of the physical curves on no facet of
+    ``loop`` (inside the domain)."""
     curve_tags = [tag for tag, dim in dims.items() if dim == 1]
     lines = [(b.data, t) for b, t in zip(raw.cells, tags) if b.type == "line"]
     data = np.concatenate([d for d, _ in lines] + [np.empty((0, 2), int)]).astype(np.int64)
@@ -296,4 +353,6 @@ def _groups(raw, tags, names, dims, used, loop, points, where):
     facet_tag = tag[named][first[k]]
     groups = tuple(sorted({names[t] for t in np.unique(facet_tag).tolist()}))
     order = {tag_: groups.index(names[tag_]) for tag_ in np.unique(facet_tag).tolist()}
-    return np.vectorize(order.__getitem__, otypes=[int])(facet_tag), groups
+    curves = {names[t] for t in np.unique(tag[named]).tolist()}
+    interior = tuple(sorted(curves - set(groups)))
+    return np.vectorize(order.__getitem__, otypes=[int])(facet_tag), groups, interior
