@@ -141,6 +141,7 @@ def test_the_harness_uses_the_library_methods():
     "import matplotlib; before = matplotlib.get_backend(); import soilwater; "
     "assert matplotlib.get_backend() == before, (before, matplotlib.get_backend())",
     "import soilwater; assert 'matplotlib.pyplot' not in sys.modules",
+    "import soilwater; assert 'matplotlib' not in sys.modules",
     "import soilwater; assert 'soilwater.studies' not in sys.modules; "
     "assert not [m for m in sys.modules if m.startswith('soilwater.studies')]",
 ])
@@ -167,3 +168,33 @@ def test_efg_paper_refuses_a_setting_it_would_replace():
     case = soilwater.load_case("terzaghi", f"efg.integration={third}")
     with pytest.raises(soilwater.InputError, match="efg.integration = .* efg-paper sets it"):
         soilwater.solve(case, "efg-paper", progress=False)
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: soilwater.load_case(None), "load_case: name_or_path must be .* not NoneType"),
+    (lambda: soilwater.load_case(3.5), "load_case: name_or_path must be .* not float"),
+    (lambda: soilwater.solve(42, "efg"), "solve: case must be a Case .* not int"),
+    (lambda: soilwater.solve("terzaghi", None), "solve: method must be a method name .* "
+                                                "not NoneType")])
+def test_api_misuse_is_a_type_error_naming_the_argument(call, message):
+    with pytest.raises(TypeError, match=message):
+        call()
+
+
+def test_builtin_cases_lists_names_without_loading_them(monkeypatch):
+    """Listing the built-in cases reads no case; looking one up reads that one."""
+    from soilwater.case import loader
+
+    loaded = []
+    read = loader._read_toml
+    monkeypatch.setattr(loader, "_read_toml", lambda *a: loaded.append(a[1]) or read(*a))
+    cases = soilwater.builtin_cases()
+    assert "terzaghi" in list(cases) and len(cases) == len(list(cases))
+    assert len(repr(cases)) < 400 and loaded == []
+    assert cases["terzaghi"].name == "terzaghi" and loaded == ["terzaghi"]
+
+
+def test_a_snapshots_mesh_carries_its_time(result):
+    for i in (0, -1):
+        mesh = result.mesh(i)
+        assert mesh.field_data["TimeValue"].tolist() == [result.snapshots[i].time]

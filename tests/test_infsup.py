@@ -80,6 +80,7 @@ def test_command_writes_the_table_and_its_figure(tmp_path, capsys):
     (["--methods", "fem-p9"], "fem-p9"),
     (["--sizes", "2,5"], "--sizes"),
     (["--sizes", "5,x"], "--sizes"),
+    (["--methods", "fem-th", "--sizes", "100000"], "GiB for the test's dense matrices"),
     (["--set", "efg.weight_u=exp:0"], "efg.weight_u"),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, args, word):

@@ -1,5 +1,7 @@
 """Case definitions: built-in case files, nodes, time levels, overrides and input errors."""
 
+import codecs
+import os
 import json
 import pickle
 from importlib.resources import files
@@ -281,6 +283,40 @@ def test_missing_edge_and_bad_file(tmp_path):
         load_case(path)
     with pytest.raises(InputError, match="does not exist"):
         load_case(tmp_path / "absent.toml")
+
+
+@pytest.mark.parametrize("content, message", [
+    ('name = "caf\xe9"\n'.encode("latin-1"), "is not UTF-8 text: byte 0xe9 at position "
+                                               "11 \\(line 1, column 12\\); save it as UTF-8"),
+    (b"\x00\xff\xfe garbage", "is not UTF-8 text: byte 0xff at position 1 "),
+    (codecs.BOM_UTF8 + b'name = "a"\n', "starts with a UTF-8 byte-order mark \\(bytes "
+                                          "0-2\\).*save it as UTF-8 without BOM")])
+def test_a_case_file_that_is_not_utf8_is_named_with_the_byte(tmp_path, content, message):
+    path = tmp_path / "own.toml"
+    path.write_bytes(content)
+    with pytest.raises(InputError, match=f"case file '{path}' {message}"):
+        load_case(path)
+
+
+def test_a_case_path_that_is_no_regular_file_says_what_it_is(tmp_path):
+    fifo = tmp_path / "pipe.toml"
+    os.mkfifo(fifo)
+    for path, what in ((tmp_path, "a folder"), (fifo, "not a regular file"),
+                       ("/dev/null", "not a regular file")):
+        with pytest.raises(InputError, match=f"is {what}: give a TOML file"):
+            load_case(path)
+
+
+def test_a_dotted_group_name_is_quoted_in_an_override(tmp_path):
+    """A boundary group named ``a.b`` (valid in TOML) is reached by quoting it, as in
+    TOML; unquoted, the dots are sections, and the message says how to quote."""
+    from soilwater.case.schema import apply_override
+
+    data = {"boundary": {"a.b": {"water": "impermeable"}}}
+    apply_override(data, 'boundary."a.b".water=drained')
+    assert data == {"boundary": {"a.b": {"water": "drained"}}}
+    with pytest.raises(InputError, match='quote a name holding a dot'):
+        apply_override(data, 'boundary."a.b.water=drained')
 
 
 def test_a_missing_material_key_is_named(tmp_path):

@@ -9,6 +9,8 @@ Every other method is a scikit-fem element pair of :data:`soilwater.fem.spaces.P
 :func:`solve` all look methods up here, in :data:`METHODS`.
 """
 
+from os import PathLike
+
 from soilwater.case.loader import load_case
 from soilwater.case.model import Case
 from soilwater.efg.settings import PAPER, RECOMMENDED, configuration
@@ -118,6 +120,8 @@ def solve(case, method="efg", progress=True):
 
     Raises
     ------
+    TypeError
+        A ``case`` or ``method`` of the wrong type (naming the argument).
     InputError
         An unknown method or a case the method cannot solve (one line naming the fix).
     ConvergenceError
@@ -132,5 +136,11 @@ def solve(case, method="efg", progress=True):
     [0.05, 0.1]
     """
     if not isinstance(case, Case):
+        if not isinstance(case, (str, PathLike)):
+            raise TypeError(f"solve: case must be a Case (soilwater.load_case), a built-in "
+                            f"case name or a TOML file's path, not {type(case).__name__}")
         case = load_case(case)
+    if not isinstance(method, str):
+        raise TypeError(f"solve: method must be a method name ({', '.join(METHODS)}), not "
+                        f"{type(method).__name__}")
     return solver(method)(case, progress=progress)

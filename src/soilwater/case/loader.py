@@ -23,8 +23,11 @@ The built-in cases are the TOML files of ``soilwater/case/builtin``, one case pe
 named by the file's stem.
 """
 
+import codecs
 import tomllib
+from collections.abc import Mapping
 from importlib.resources import files
+from os import PathLike
 from pathlib import Path
 
 from soilwater.case.model import Case
@@ -34,7 +37,8 @@ from soilwater.errors import InputError, require
 
 
 def builtin_cases():
-    """The built-in cases, ``{name: Case}`` in alphabetical order.
+    """The built-in cases, a read-only mapping ``{name: Case}`` in alphabetical order; a
+    case is read and validated when it is looked up, so listing the names reads nothing.
 
     One case per TOML file of ``soilwater/case/builtin``, named by the file's stem (each
     file's ``name`` key, if given, is the same).
@@ -43,9 +47,29 @@ def builtin_cases():
     --------
     >>> list(builtin_cases())[:3]
     ['cantilever', 'embankment', 'large-strain-column']
+    >>> builtin_cases()["terzaghi"].name
+    'terzaghi'
     """
-    return {name: case_from_dict(_read_toml(entry, name))
-            for name, entry in _builtin_files().items()}
+    return Builtins(_builtin_files())
+
+
+class Builtins(Mapping):
+    """The built-in cases by name (:func:`builtin_cases`): each loaded on lookup."""
+
+    def __init__(self, entries):
+        self._entries = entries
+
+    def __getitem__(self, name):
+        return case_from_dict(_read_toml(self._entries[name], name))
+
+    def __iter__(self):
+        return iter(self._entries)
+
+    def __len__(self):
+        return len(self._entries)
+
+    def __repr__(self):
+        return f"builtin_cases({', '.join(self._entries)})"
 
 
 def load_case(name_or_path, *entries, overrides=()):
@@ -85,6 +109,9 @@ def load_case(name_or_path, *entries, overrides=()):
     ...
     soilwater.errors.InputError: material.permeability = -1e-06 must be >= 0 ...
     """
+    if not isinstance(name_or_path, (str, PathLike, Case)):
+        raise TypeError(f"load_case: name_or_path must be a built-in case name, a TOML "
+                        f"file's path or a Case, not {type(name_or_path).__name__}")
     data = name_or_path.to_dict() if isinstance(name_or_path, Case) else _raw(name_or_path)
     for entry in (*entries, overrides):
         for text in ([entry] if isinstance(entry, str) else entry):
@@ -112,19 +139,50 @@ def _raw(name_or_path):
     path = Path(name_or_path)
     require(path.suffix == ".toml" or path.exists(), f"case {text!r} is neither a built-in "
             f"case ({', '.join(builtins)}) nor a TOML file")
-    require(path.is_file(), f"case file {text!r} does not exist")
+    require(path.exists(), f"case file {text!r} does not exist")
+    require(path.is_file(), f"case file {text!r} is "
+            f"{'a folder' if path.is_dir() else 'not a regular file'}: give a TOML file")
     return _read_toml(path, path.stem, text)
+
+
+def text(raw, what):
+    """``raw`` bytes decoded as UTF-8 (TOML's encoding).
+
+    Raises
+    ------
+    InputError
+        For a byte-order mark or bytes that are not UTF-8, naming ``what``, the byte's
+        position (line, column) and the fix.
+
+    Examples
+    --------
+    >>> text("name = 'caf\u00e9'".encode("latin-1"), "case file 'a.toml'")
+    Traceback (most recent call last):
+    ...
+    soilwater.errors.InputError: case file 'a.toml' is not UTF-8 text: byte 0xe9 at position 11 (line 1, column 12); save it as UTF-8
+    """
+    require(not raw.startswith(codecs.BOM_UTF8), f"{what} starts with a UTF-8 byte-order "
+            "mark (bytes 0-2), which TOML does not allow: save it as UTF-8 without BOM")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as err:
+        line = raw[:err.start].count(b"\n") + 1
+        column = err.start - (raw.rfind(b"\n", 0, err.start) + 1) + 1
+        raise InputError(f"{what} is not UTF-8 text: byte 0x{raw[err.start]:02x} at "
+                         f"position {err.start} (line {line}, column {column}); save it as "
+                         "UTF-8") from None
 
 
 def _read_toml(source, stem, label=None):
     """Parse the TOML file ``source`` (a path or resource); ``name`` defaults to ``stem``,
     and a relative ``geometry.mesh`` is read from the file's folder."""
+    label = label or source.name
+    with source.open("rb") as fh:
+        raw = fh.read()
     try:
-        with source.open("rb") as fh:
-            data = tomllib.load(fh)
+        data = tomllib.loads(text(raw, f"case file {label!r}"))
     except tomllib.TOMLDecodeError as err:
-        raise InputError(f"case file {label or source.name!r} is not valid TOML: "
-                         f"{err}") from None
+        raise InputError(f"case file {label!r} is not valid TOML: {err}") from None
     data.setdefault("name", stem)
     geometry = data.get("geometry")
     if isinstance(geometry, dict) and isinstance(geometry.get("mesh"), str):

@@ -324,6 +324,22 @@ MAX_TRIANGLE_ORDER = 19
 _NORMAL = {"left": "ux", "right": "ux", "bottom": "uy", "top": "uy"}
 
 
+def _key_path(key):
+    """The parts of a dotted key: split at the dots, or read as a TOML dotted key when it
+    quotes a part (``boundary."a.b".water``); ``[]`` for a malformed one."""
+    if '"' not in key and "'" not in key:
+        return [part.strip() for part in key.split(".")]
+    try:
+        table = tomllib.loads(f"{key} = 0")
+    except tomllib.TOMLDecodeError:
+        return []
+    path = []
+    while isinstance(table, dict) and len(table) == 1:
+        (part, table), = table.items()
+        path.append(part)
+    return path
+
+
 def apply_override(data, text):
     """Set ``section.key[.key]=value`` in a raw case dict, in place.
 
@@ -333,7 +349,8 @@ def apply_override(data, text):
         The case in TOML layout, not yet validated.
     text : str
         ``section.key=value`` with the value in TOML syntax (a bare word is read as a
-        string), e.g. ``material.permeability=1e-6`` or ``boundary.top.water=drained``.
+        string), e.g. ``material.permeability=1e-6`` or ``boundary.top.water=drained``;
+        a part holding a dot is quoted as in TOML (``boundary."a.b".water=drained``).
         Setting ``time.steps`` drops the geometric keys (and the reverse), setting
         ``discretisation.nx`` drops ``discretisation.x`` (and the reverse, likewise for y);
         setting an edge's ``displacement`` replaces its ``ux`` and ``uy``, and setting ``ux`` or
@@ -354,11 +371,16 @@ def apply_override(data, text):
     >>> apply_override(data, "time.steps=10")
     >>> data
     {'time': {'end': 1.0, 'steps': 10}}
+    >>> data = {}
+    >>> apply_override(data, 'boundary."a.b".water=drained')   # a group named a.b
+    >>> data
+    {'boundary': {'a.b': {'water': 'drained'}}}
     """
     key, sep, value = text.partition("=")
-    path = [part.strip() for part in key.split(".")]
-    require(sep and all(path), f"override {text!r}: write section.key=value, "
-            "e.g. material.permeability=1e-6")
+    path = _key_path(key) if sep else []
+    require(sep and path and all(path), f"override {text!r}: write section.key=value, "
+            "e.g. material.permeability=1e-6 (quote a name holding a dot: "
+            "boundary.\"a.b\".water=drained)")
     try:
         value = tomllib.loads(f"v = {value}")["v"]
     except tomllib.TOMLDecodeError:

@@ -47,11 +47,12 @@ from soilwater.efg.discretisation import discretise
 from soilwater.efg.mls import ShapeFunctions
 from soilwater.fem.assembly import Shapes, block
 from soilwater.fem.spaces import PAIRS, Space, cell_bases
-from soilwater.errors import require
+from soilwater.errors import InputError, require
 from soilwater.diagnostics.infsup import coefficients, inf_sup
 from soilwater.case.loader import load_case
 from soilwater.case.schema import apply_override
 from soilwater.case.validation import case_from_dict
+from soilwater.linalg.environment import available_memory
 
 BOUNDARIES = ("free", "dirichlet")
 SIZES = (5, 9, 17, 33)
@@ -114,6 +115,18 @@ def write(out, methods, sizes=SIZES, boundaries=BOUNDARIES, overrides=()):
     return [out, figure]
 
 
+def memory(n):
+    """Bytes of the dense matrices of :func:`soilwater.diagnostics.infsup.inf_sup` on n x n
+    nodes, bounded above: ``8 (3 n_p^2 + 2 n_p n_u)`` with ``n_p = n^2`` pressure and
+    ``n_u = 8 n^2`` displacement unknowns (the quadratic pairs' count).
+
+    >>> round(memory(33) / 2**20)
+    172
+    """
+    n_p = n**2
+    return 8 * (3 * n_p**2 + 2 * n_p * 8 * n_p)
+
+
 def measure(methods, sizes=SIZES, boundaries=BOUNDARIES, overrides=(), progress=False):
     """The inf-sup table: one row per method, boundary variant and size.
 
@@ -142,6 +155,13 @@ def measure(methods, sizes=SIZES, boundaries=BOUNDARIES, overrides=(), progress=
                 f"{', '.join(known)}")
     for n in sizes:
         require(n >= 3, f"--sizes: {n} nodes per side is too few: use 3 or more")
+    largest, free = max(sizes, default=3), available_memory()
+    if memory(largest) > free:
+        fits = int((free / memory(1)) ** 0.25)
+        raise InputError(f"--sizes: {largest} nodes per side needs about "
+                         f"{memory(largest) / 2**30:.3g} GiB for the test's dense matrices, "
+                         f"more than the {free / 2**30:.3g} GiB free: use at most {fits} "
+                         "nodes per side")
     for boundary in boundaries:
         require(boundary in BOUNDARIES, f"boundary {boundary!r}: use free or dirichlet")
     rows = []

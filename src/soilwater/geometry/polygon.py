@@ -9,7 +9,6 @@ cells (:func:`soilwater.efg.quadrature.square_cells`) and the triangles of a pol
 """
 
 import numpy as np
-from matplotlib.path import Path
 from scipy import ndimage
 
 TOUCH = 1e-9
@@ -75,7 +74,10 @@ def raster(boundary, h):
 
 
 def path(boundary):
-    """The closed matplotlib path of the polygon."""
+    """The closed matplotlib path of the polygon (matplotlib is imported here, not with
+    the package)."""
+    from matplotlib.path import Path
+
     return Path(np.vstack([boundary, boundary[:1]]), closed=True)
 
 

@@ -1,5 +1,5 @@
 """soilwater's environment variables (``SOILWATER_LINEAR_SOLVER``, ``SOILWATER_THREADS``)
-set for a block of code."""
+set for a block of code, and the memory the machine has left."""
 
 import os
 from contextlib import contextmanager
@@ -27,3 +27,20 @@ def setting(name, value):
             del os.environ[name]
         else:
             os.environ[name] = saved
+
+
+def available_memory():
+    """The memory this process can still take [bytes]: ``MemAvailable`` of
+    ``/proc/meminfo``, else the physical memory (``os.sysconf``).
+
+    >>> available_memory() > 0
+    True
+    """
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")

@@ -212,6 +212,10 @@ TESTS = {
 }
 
 
+#: The largest controlling strain of :func:`run_test` (logarithmic).
+MAX_STRAIN = 5.0
+
+
 def run_test(material, test, strain, points=200):
     """Run a named test to ``strain`` and return the ``soilwater path`` table.
 
@@ -224,12 +228,18 @@ def run_test(material, test, strain, points=200):
         Final controlling strain (axial compression, or shear strain for simple shear),
         positive.
     points : int
-        Output rows after the initial one (spread over the segments).
+        Output rows after the initial one (spread over the segments), >= 1.
 
     Returns
     -------
     pandas.DataFrame
         Columns ``step, eps_a, eps_v, p, q, pc`` (compression positive).
+
+    Raises
+    ------
+    InputError
+        For ``points`` < 1, a strain outside (0, :data:`MAX_STRAIN`], or one that would
+        compress the void ratio of an isotropic or oedometer test to zero.
 
     Examples
     --------
@@ -246,7 +256,18 @@ def run_test(material, test, strain, points=200):
 def _integrated(material, test, strain, points):
     """A named test from the material's initial state: the raw path of :func:`integrate`
     (``points`` rows spread over the segments) and the segments."""
-    require(strain > 0, f"--strain {strain} must be positive")
+    require(isinstance(points, (int, np.integer)) and points >= 1,
+            f"--points {points} must be a whole number >= 1 (output rows)")
+    require(np.isfinite(strain) and 0 < strain <= MAX_STRAIN,
+            f"--strain {strain} must be > 0 and <= {MAX_STRAIN:g} (a logarithmic strain: "
+            f"{MAX_STRAIN:g} shortens a specimen to {100 * np.exp(-MAX_STRAIN):.1f} % of its "
+            "height)")
+    volumetric = {"isotropic": 3 * strain, "oedometer": strain}.get(test, 0.0)
+    e0 = getattr(material, "e0", None)
+    require(e0 is None or volumetric < np.log1p(e0),
+            f"--strain {strain} compresses the {test} specimen to a volumetric strain of "
+            f"{volumetric:g}, past ln(1 + e0) = {np.log1p(e0 or 0):.3g} where the void ratio "
+            f"reaches 0: give a strain below {np.log1p(e0 or 0) * strain / max(volumetric, 1e-300):.3g}")
     segments = _program(test, strain)
     stress, state = material.initial_state(1)
     raw = integrate(material, stress[0], {k: v[0] for k, v in state.items()}, segments,
