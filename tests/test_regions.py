@@ -1,6 +1,7 @@
 """Several soils in one case: ``[material.NAME]`` on the physical surfaces of a mesh
 (soilwater.case.regions, soilwater.material.regions), checked against closed forms."""
 
+import json
 import re
 
 import numpy as np
@@ -145,3 +146,25 @@ def _with_material(path, material):
 def test_regions_need_a_mesh():
     with pytest.raises(InputError, match="a rectangle has one material"):
         soilwater.load_case("terzaghi", ("material.crust.E=5.0",))
+
+
+@pytest.mark.parametrize("method", ["efg", "efg-paper", "fem-th", "fem-p1p1-stab"])
+def test_result_files_carry_each_cells_region_as_an_integer_with_its_name(tmp_path,
+                                                                          method):
+    """The VTU field ``region`` is cell data, an integer index into the mesh's region
+    names in ``summary.json`` (``provenance.mesh.regions``): on the layered column each cell is clay below 4 m and crust above (by
+    its initial centre), never a smoothed value between the two."""
+    case = oedometer(layered_column(tmp_path / "column.msh")).replace(
+        "time.end=10", "time.dt0=5", "time.dt_max=5")
+    result = soilwater.solve(case, method, progress=False)
+    mesh = result.mesh()
+    assert "region" not in mesh.point_data
+    region = mesh.cell_data["region"][0]
+    assert region.dtype.kind == "i"
+    (cells,) = [block.data for block in mesh.cells]
+    initial = (mesh.points - mesh.point_data["u"])[cells[:, :3], 1].mean(axis=1)
+    summary = json.loads((result.write(tmp_path / "run") / "summary.json").read_text())
+    names = np.array(summary["provenance"]["mesh"]["regions"])[region]
+    assert set(names) == {"clay", "crust"}
+    assert np.array_equal(names == "crust", initial >= 4.0)
+    assert summary["field_units"]["region"] == "-"

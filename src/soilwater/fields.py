@@ -37,11 +37,13 @@ from soilwater.physics.geostatic import G_N
 #: ``stretching`` (3 x 3) and, for FEM, ``velocity`` of the last step;
 #: ``support_radius`` EFG's MLS support. Cell data: ``log_strain`` the Hencky strain
 #: ``ln V`` (3 x 3; ``F = V R``) of each cell from its corners' initial and current
-#: positions, ``shear_strain`` its invariant ``sqrt(2/3 e:e)``, ``e`` its deviator.
+#: positions, ``shear_strain`` its invariant ``sqrt(2/3 e:e)``, ``e`` its deviator;
+#: with material regions, ``region`` (integer) the index into the case's region names
+#: (``summary.json``'s ``regions``) of the region that holds the cell's initial centre.
 UNITS = {"u": "m", "p_w": "kPa", "p_w_total": "kPa", "p_eff": "kPa", "q": "kPa",
          "pc": "kPa", "v": "-", "e": "-", "k": "m/s", "stress": "kPa",
          "stress_total": "kPa", "stretching": "1/s", "velocity": "m/s",
-         "support_radius": "m", "log_strain": "-", "shear_strain": "-"}
+         "support_radius": "m", "log_strain": "-", "shear_strain": "-", "region": "-"}
 #: Quadratic VTK cell of each linear one (the quadratic pairs' own nodes).
 QUADRATIC = {"triangle": "triangle6", "quad": "quad9"}
 
@@ -60,7 +62,11 @@ def mesh(snapshot, case):
     -------
     meshio.Mesh
         Current positions (N, 3), z = 0; one cell block; the fields of :data:`UNITS`
-        that the snapshot has or that follow from it.
+        that the snapshot has or that follow from it. A point's material region (a
+        smoothed value where solvers carry it) is written as the integer cell field
+        ``region`` instead. Its ``field_data["TimeValue"]`` is the snapshot's time [s]
+        (ParaView's name; a VTU file written by meshio drops it, and a result folder's
+        ``fields.pvd`` gives each file's time).
     """
     points = np.asarray(snapshot.points)
     data = {k: v for k, v in snapshot.point_data.items() if k != "permeability"}  # -> k
@@ -77,10 +83,13 @@ def mesh(snapshot, case):
         kind = QUADRATIC[kind]
     data = {**data, **derived(case, points, data)}
     cell_data = strains(initial[corners], points[corners])
+    if data.pop("region", None) is not None:
+        cell_data["region"] = case.geometry.region_of(initial[corners].mean(axis=1))
     data = {name: _vtk(values) for name, values in data.items()}
     points3 = np.column_stack([points, np.zeros(len(points))])
     return meshio.Mesh(points3, [(kind, cells)], point_data=data,
-                       cell_data={k: [v] for k, v in cell_data.items()})
+                       cell_data={k: [v] for k, v in cell_data.items()},
+                       field_data={"TimeValue": np.array([float(snapshot.time)])})
 
 
 def permeability(case, state):
