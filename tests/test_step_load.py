@@ -2,6 +2,7 @@
 undrained response, a failing first level spreads the jump over its halves
 (soilwater.nonlinear.march), and a run that cannot take the step says why."""
 
+import numpy as np
 import pytest
 
 import soilwater
@@ -54,13 +55,56 @@ def test_a_failing_step_load_is_spread_over_the_halves_of_the_first_level():
     assert history["substeps"].tolist() == [4, 1]
 
 
-def test_a_step_load_that_fails_says_why_and_what_to_do():
-    """A level that fails after a step load on a drained boundary names the thin drained
-    skin and the three cures measured on the column (fem-th fails with time.dt0 = 1e5 s,
-    growth 1.5, and takes dt0 = 1e6 s, a load ramped over 1e6 s, or 81 rows of nodes);
-    without a step load the advice is the general one."""
+def test_a_failing_step_says_why_and_what_to_do():
+    """The advice follows the cause: a step load on the drained top whose shortest
+    sub-step (1e6 s / 2^MAX_CUTS) drains a skin of about 0.08 m, under the 0.5 m node
+    spacing, names the skin and its three cures measured on the column (fem-th fails with
+    time.dt0 = 1e5 s, growth 1.5, and takes dt0 = 1e6 s, a load ramped over 1e6 s, or 81
+    rows of nodes); the same load with a first step 1e6 times longer (a skin of metres)
+    names the capacity instead; a ramp names the load's growth; an inverted element the
+    mesh; and every message says that time.on_failure = "stop" keeps what converged."""
     step = _Fake(limit=0.0)
-    for case, advice in ((load_case("large-strain-column", STEP), "time.dt0"),
-                         (load_case("large-strain-column"), "reduce time steps")):
-        with pytest.raises(ConvergenceError, match=advice):
+    long = (*STEP, "time.dt0=1e12", "time.end=1e13", "time.dt_max=1e13")
+    for case, advice in ((load_case("large-strain-column", STEP), r"skin of about 0\.081 m"),
+                         (load_case("large-strain-column", long), "bearing capacity"),
+                         (load_case("large-strain-column"), "bearing capacity")):
+        with pytest.raises(ConvergenceError, match=advice) as err:
             march.march(case, 0.0, step, None, lambda c, t: None, {}, progress=False)
+        assert 'time.on_failure = "stop" keeps the levels that converged' in str(err.value)
+    assert "time.dt0" not in march._advice(load_case("large-strain-column", long), 0.0,
+                                           1e12, "Newton diverged")
+    inverted = march._advice(load_case("large-strain-column", STEP), 0.0, 1e6,
+                             "element 3 inverts (J = -0.1)")
+    assert "re-mesh" in inverted and "time.dt0" not in inverted
+
+
+@pytest.mark.parametrize("change, cause", [
+    ("boundary.top.traction=[0, -1e12]", "exceeds the soil's initial P-wave modulus"),
+    ("material.E=1e300", "displacements are below round-off")])
+def test_a_load_or_modulus_of_the_wrong_size_is_named_as_the_cause(change, cause):
+    """A traction of 1e12 on Terzaghi's soil (E = 7.2) or a modulus of 1e300 fails every
+    halving; the message names the size of the input, not the step or the mesh."""
+    case = load_case("terzaghi", (change, "time.steps=5", "time.end=1"))
+    with pytest.raises(ConvergenceError, match=cause) as err:
+        soilwater.solve(case, "fem-th", progress=False)
+    assert "re-mesh" not in str(err.value) and "time.dt0" not in str(err.value)
+
+
+#: A user's column: Xie and Leo's layer drained at both ends under 360 kPa at once
+#: (mv q = 0.36, 30 % strain), geometric steps from 1e3 s, 0.25 m wide so that its
+#: nodes are square.
+TWO_WAY = ("boundary.bottom.water=drained", "boundary.top.traction=[0, -360]",
+           "time.dt0=1e3", "time.growth=2", "geometry.width=0.25",
+           "probes.mid=[0.125, 5.0]", "probes.base=[0.125, 0.0]")
+
+
+@pytest.mark.parametrize("method, ny", [*((m, 41) for m in soilwater.METHODS),
+                                        ("fem-th", 81)])
+def test_a_step_loaded_large_strain_column_drained_at_both_ends_runs(method, ny):
+    """Every method runs the step-loaded column with two-way drainage (fem-th also on
+    81 rows of nodes) and ends consolidated at the closed form's settlement
+    H (1 - exp(-mv q)) = 3.02 m within 1 %."""
+    case = load_case("xie-leo", (*TWO_WAY, f"discretisation.ny={ny}"))
+    history = soilwater.solve(case, method, progress=False).history
+    assert history["settlement"].iloc[-1] == pytest.approx(10 * (1 - np.exp(-0.36)),
+                                                           rel=0.01)

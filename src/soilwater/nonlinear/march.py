@@ -171,23 +171,67 @@ def _advance(current, step, t0, t1, stats, case):
         except (ConvergenceError, FloatingPointError) as err:
             reason = err
     raise ConvergenceError(f"step t = {t0:g} -> {t1:g} s failed after {MAX_CUTS} halvings "
-                           f"of the time step ({reason}): {_advice(case)}")
+                           f"of the time step ({reason}): {_advice(case, t0, t1, reason)}")
 
 
-def _advice(case):
-    """What to do about a level that fails after every halving.
+#: A modulus this many times the largest load makes displacements of round-off size.
+ILL_CONDITIONED = 1e12
 
-    After a step load on a drained boundary, a short step drains a skin thinner than the
-    node spacing, where a soft soil compresses at once: a discretisation that cannot
-    follow that skin (fixed finite elements) fails the more, the shorter the step. This
-    is the nonlinear face of the minimum time step of consolidation, about h^2 / (6 c_v)
-    for linear elements (Vermeer and Verruijt 1981): halving cannot help, longer first
-    steps or a ramped load can.
+
+def _advice(case, t0, t1, reason):
+    """What to do about the level ``t0 -> t1`` that failed after every halving, from why
+    (``reason``, the last failure) and when it failed.
+
+    * A load or stress larger than the initial P-wave modulus (strains of order one), or
+      a modulus more than :data:`ILL_CONDITIONED` times the loads (displacements below
+      round-off): the input's size or units.
+    * An element or cell that inverts: the mesh cannot follow the deformation.
+    * A step load on a drained boundary whose smallest sub-step drains a skin thinner than
+      the node spacing, ``sqrt(c_v dt) < h`` (``c_v`` from the initial P-wave modulus and
+      the permeability): a soft soil compresses at once in that skin, which a fixed
+      discretisation cannot follow, the less the shorter the step. This is the nonlinear
+      face of the minimum time step of consolidation, about ``h^2 / (6 c_v)`` for linear
+      elements (Vermeer and Verruijt 1981): longer first steps or a ramped load help.
+    * A load that grows over the level: it may exceed what the soil can carry.
+
+    Every message ends by naming ``time.on_failure = "stop"``, which keeps the levels that
+    converged.
     """
-    if case.loading.jump(0.0) and case.boundary.drained:
-        return ("the step load drains a skin thinner than the node spacing at the drained "
-                "boundary, which shorter steps make thinner (the minimum time step of "
-                "consolidation, about h^2 / (6 c_v)): lengthen the first steps (time.dt0, "
-                "e.g. 10 or 100 times), refine the nodes at the drained boundary, or ramp "
-                "the load over a first interval (loading.load = [[0, 0], [t1, 1]])")
-    return "reduce time steps or loading rate, or check the boundary conditions"
+    from soilwater.physics.scales import Scales
+
+    loading = case.loading
+    scales = Scales.of(case, case.material())
+    skin = (float(np.sqrt(case.fluid.mobility * scales.modulus * (t1 - t0) / 2**MAX_CUTS))
+            if loading.jump(t0) and case.boundary.drained else None)
+    if scales.stress > scales.modulus:
+        cause = (f"the largest load or stress ({scales.stress:.3g}) exceeds the soil's "
+                 f"initial P-wave modulus ({scales.modulus:.3g}, the case's units): "
+                 "strains of order one at once; check the loads' and moduli's size and "
+                 "units")
+    elif 1e-12 < scales.stress < scales.modulus / ILL_CONDITIONED:
+        cause = (f"the soil's initial P-wave modulus ({scales.modulus:.3g}) is more than "
+                 f"{ILL_CONDITIONED:.0e} times the largest load or stress "
+                 f"({scales.stress:.3g}): the displacements are below round-off; check the "
+                 "moduli's size and units")
+    elif "invert" in str(reason):
+        cause = ("the deformation is more than the mesh can follow here: stop earlier, "
+                 "refine where it distorts, or re-mesh (fem.remesh = \"delaunay\" for the "
+                 "triangle pairs)")
+    elif skin is not None and skin < scales.h:
+        cause = (f"the step load drains a skin of about {skin:.2g} m in the shortest "
+                 f"sub-step, thinner than the node spacing ({scales.h:.2g} m), and shorter "
+                 "steps make it thinner (the minimum time step of consolidation, about "
+                 "h^2 / (6 c_v)): lengthen the first steps (time.dt0, e.g. 10 or 100 "
+                 "times), refine the nodes at the drained boundary, or ramp the load "
+                 "over a first interval (loading.load = [[0, 0], [t1, 1]])")
+    elif loading.jump(t0) or float(loading.factor(t1)) > float(loading.factor(t0)):
+        cause = (f"the load grows to {float(loading.factor(t1)):.4g} x the tractions "
+                 "and footing loads over this step: check that it does not exceed "
+                 "what the soil can carry (a footing's bearing capacity), then "
+                 "reduce the load steps or the loading rate")
+    else:
+        cause = ("reduce the time steps or the loading rate, or check the boundary "
+                 "conditions and material")
+    keep = ("" if case.time.on_failure == "stop" else
+            "; time.on_failure = \"stop\" keeps the levels that converged")
+    return cause + keep
