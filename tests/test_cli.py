@@ -374,3 +374,28 @@ def test_progress_without_a_terminal_is_plain_lines_and_quiet_silences_it(tmp_pa
                         r"cut-backs, \d+ s elapsed, about 0 s left", lines[-1]), lines[-1]
     assert main(args + ["--out", str(tmp_path / "b"), "--quiet"]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_a_second_run_on_the_same_out_is_refused_while_the_first_writes_it(tmp_path,
+                                                                           capsys):
+    """Two runs started on one --out: the second refuses in one line naming the first's
+    process, and the first writes its result."""
+    out = tmp_path / "conc"
+    first = subprocess.Popen([sys.executable, "-m", "soilwater.cli", "run", "terzaghi",
+                              "--method", "fem-th", "--out", str(out), "--quiet",
+                              "--set", "time.steps=400", "--set", "time.end=1.0"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    lock = tmp_path / ".conc.lock"
+    deadline = time.monotonic() + 60
+    while not (lock.exists() and lock.read_text().strip()) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert first.poll() is None, first.communicate()
+    assert main(["run", "terzaghi", "--method", "efg", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"soilwater: error: --out {out} is being written by another soilwater "
+                   f"run (process {first.pid}, lock {lock}); wait for it to end, or "
+                   "choose another --out"]
+    stdout, stderr = first.communicate(timeout=300)
+    assert first.returncode == 0, stderr
+    assert stdout.startswith(f"wrote {out}") and (out / "summary.json").is_file()
+    assert not lock.exists()

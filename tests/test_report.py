@@ -299,3 +299,34 @@ def test_the_report_says_which_study_runs_and_the_time_left_in_plain_lines(fake,
     err = capsys.readouterr().err.splitlines()
     assert err[0].startswith("report: study 1/2 alpha; about ")
     assert err[0].endswith(" left by their last runs") and f"{round(seconds)} s" in err[0]
+
+
+@pytest.mark.parametrize("setup, words", [
+    (lambda d: (d / "REPORT.md").write_text("# My own notes\n"),
+     "REPORT.md was not written by soilwater report"),
+    (lambda d: (d / ".soilwater-output").write_text("{}\n"), "is a result of soilwater run"),
+    (lambda d: (d / "data.csv").write_text("x\n1\n"), "is not a soilwater report")])
+def test_a_report_never_writes_into_a_folder_soilwater_did_not_write(fake, tmp_path,
+                                                                    capsys, setup, words):
+    """``soilwater report --only alpha --out DIR`` refuses, before any study runs, a
+    folder holding the user's REPORT.md, a run's result or other files, and changes
+    nothing in it."""
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    setup(mine)
+    before = {p.name: p.read_bytes() for p in mine.iterdir()}
+    assert main(["report", "--only", "alpha", "--out", str(mine)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0] and f"--out {mine}" in err[0]
+    assert {p.name: p.read_bytes() for p in mine.iterdir()} == before
+    assert "fake_alpha.report" not in sys.modules or runs("alpha") == []
+
+
+def test_a_report_elsewhere_says_so_in_its_hints(fake, tmp_path):
+    """A report made with --out names that folder in its header and in every hint."""
+    out = tmp_path / "elsewhere"
+    assert main(["report", "--only", "alpha", "--out", str(out)]) == 0
+    text = (out / "REPORT.md").read_text()
+    assert f"Assembled by `soilwater report --only alpha --out {out}`" in text
+    assert f"`soilwater report --only beta --out {out}`" in text   # beta never run
+    assert (out / ".soilwater-report").is_file()
