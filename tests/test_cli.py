@@ -399,3 +399,35 @@ def test_a_second_run_on_the_same_out_is_refused_while_the_first_writes_it(tmp_p
     assert first.returncode == 0, stderr
     assert stdout.startswith(f"wrote {out}") and (out / "summary.json").is_file()
     assert not lock.exists()
+
+
+@pytest.mark.parametrize("args, words", [
+    (["run", "terzaghi", "--method", "efg", "--out", "a", "--out", "b"],
+     "--out is given twice: give it once"),
+    (["path", "table1", "--test", "isotropic", "--strain", "0.1", "--ocr", "inf",
+      "--out", "p.csv"], "'inf' is not a finite number"),
+    (["path", "table1", "--test", "isotropic", "--strain", "0.1", "--ocr", "1e300",
+      "--out", "p.csv"], "1e300 is past 10000"),
+    (["path", "table1", "--test", "isotropic", "--strain", "nan", "--out", "p.csv"],
+     "'nan' is not a finite number"),
+    (["path", "table1", "--test", "isotropic", "--strain", "0.1", "--points", "100000000",
+      "--out", "p.csv"], "must be from 1 to 1000000"),
+    (["infsup", "--methods", "", "--sizes", "3", "--out", "i.csv"],
+     "give one or more methods"),
+    (["infsup", "--methods", "fem-th", "--sizes", "3,3", "--out", "i.csv"],
+     "--sizes names 3 twice"),
+    (["infsup", "--methods", "fem-th,fem-th", "--sizes", "3", "--out", "i.csv"],
+     "--methods names fem-th twice"),
+    (["infsup", "--methods", "fem-th", "--sizes", "3", "--set", "time.end=1",
+      "--out", "i.csv"], "infsup takes EFG settings only")])
+def test_options_given_twice_or_out_of_range_are_refused_before_any_work(
+        tmp_path, monkeypatch, capsys, args, words):
+    """argparse's refusals exit with status 2 (SystemExit), soilwater's return it."""
+    monkeypatch.chdir(tmp_path)
+    try:
+        status = main(args)
+    except SystemExit as exit:
+        status = exit.code
+    assert status == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert words in err[-1] and list(tmp_path.iterdir()) == []

@@ -119,14 +119,14 @@ def test_results_come_back_to_the_clients_cache(cluster, tmp_path, monkeypatch):
 
 @pytest.fixture
 def stranger(cluster, tmp_path):
-    """A third worker importing a copy of ``soilwater`` with one comment line added to a
-    shared module: the same code, another source hash."""
+    """A third worker importing a copy of ``soilwater`` with one line of code added to a
+    shared module (a comment would leave the hash: it hashes code, not text)."""
     address, _ = cluster
     src = tmp_path / "src"
     shutil.copytree(Path(soilwater.__file__).parent, src / "soilwater",
                     ignore=shutil.ignore_patterns("__pycache__"))
     with (src / "soilwater" / "errors.py").open("a") as fh:
-        fh.write("# another checkout\n")
+        fh.write("ANOTHER_CHECKOUT = True\n")
     path = os.pathsep.join(filter(None, [str(src), os.environ.get("PYTHONPATH")]))
     process = _worker(tmp_path / "worker3", address, PYTHONPATH=path)
     try:

@@ -13,6 +13,7 @@ Nothing fails with a traceback. Exit status:
 """
 
 import argparse
+import math
 import multiprocessing
 import os
 import signal
@@ -137,12 +138,63 @@ def interruptible():
             signal.signal(signum, action)
 
 
+class _Once(argparse.Action):
+    """Store an option's value, refusing the option given twice (argparse would keep the
+    last silently: ``--out a --out b``)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        given = namespace.__dict__.setdefault("_given", set())
+        if self.dest in given:
+            parser.error(f"{option_string} is given twice: give it once")
+        given.add(self.dest)
+        setattr(namespace, self.dest, values)
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose options taking one value refuse to be repeated
+    (:class:`_Once`); its subcommands' parsers are of this class too."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.register("action", None, _Once)
+        self.register("action", "store", _Once)
+
+
+def _finite(text):
+    """A finite float (``--strain``, ``--ocr``): nan and inf are refused."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return value
+
+
+def _ocr(text):
+    """An overconsolidation ratio: finite, at most :data:`MAX_OCR`."""
+    value = _finite(text)
+    if value > MAX_OCR:
+        raise argparse.ArgumentTypeError(f"{text} is past {MAX_OCR:g}, no soil's ratio "
+                                         "(p'c0 would swamp every other stress)")
+    return value
+
+
+def _points(text):
+    """Output rows of ``soilwater path``: a whole number from 1 to :data:`MAX_POINTS`."""
+    value = int(text)
+    if not 1 <= value <= MAX_POINTS:
+        raise argparse.ArgumentTypeError(f"{text} must be from 1 to {MAX_POINTS}")
+    return value
+
+
+#: Bounds of ``soilwater path``'s ``--ocr`` and ``--points``.
+MAX_OCR, MAX_POINTS = 1e4, 1_000_000
+
+
 def _parser():
     from soilwater.methods import METHODS
     from soilwater.material.driver import TESTS
     from soilwater.targets import MARKER
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="soilwater",
         description="EFG and FEM side by side on soil-water coupled problems.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -178,11 +230,13 @@ def _parser():
     p.add_argument("material", help="preset name (table1) or TOML file with [material]")
     p.add_argument("--test", required=True, choices=list(TESTS), metavar="NAME",
                    help="one of: " + ", ".join(TESTS))
-    p.add_argument("--strain", required=True, type=float,
+    p.add_argument("--strain", required=True, type=_finite,
                    help="final axial strain (shear strain for simple shear), positive")
-    p.add_argument("--ocr", type=float, help="isotropic overconsolidation ratio p'c0/p'0")
+    p.add_argument("--ocr", type=_ocr, help="isotropic overconsolidation ratio p'c0/p'0, "
+                   f"1 to {MAX_OCR:g}")
     p.add_argument("--model", choices=["original", "modified"], help="Cam-clay variant")
-    p.add_argument("--points", type=int, default=200, help="output rows (default 200)")
+    p.add_argument("--points", type=_points, default=200,
+                   help=f"output rows, 1 to {MAX_POINTS} (default 200)")
     p.add_argument("--out", required=True, help="CSV file: step, eps_a, eps_v, p, q, pc")
     p.set_defaults(func=_path)
 
@@ -312,6 +366,17 @@ def _infsup(args):
     except ValueError:
         raise SoilwaterError(f"--sizes {args.sizes!r}: give comma-separated integers, "
                              "e.g. 5,9,17,33") from None
+    if not methods:
+        raise SoilwaterError(f"--methods {args.methods!r}: give one or more methods, "
+                             "e.g. fem-th,fem-p1p1,efg")
+    for option, values in (("--methods", methods), ("--sizes", sizes)):
+        twice = sorted({str(v) for v in values if values.count(v) > 1})
+        if twice:
+            raise SoilwaterError(f"{option} names {', '.join(twice)} twice: give each once")
+    others = [s for s in args.set if not s.strip().startswith("efg.")]
+    if others:
+        raise SoilwaterError(f"--set {others[0]!r}: infsup takes EFG settings only "
+                             "(efg.KEY=VALUE, e.g. efg.weight_u=exp:0.5)")
     boundaries = [args.boundary] if args.boundary else list(BOUNDARIES)
     for path in write(args.out, methods, sizes, boundaries, args.set):
         print(f"wrote {path}")
