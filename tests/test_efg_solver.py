@@ -85,7 +85,7 @@ def test_bad_runs_leave_the_output_folder_untouched(tmp_path, capsys, overrides,
     out = tmp_path / "run"
     out.mkdir()
     (out / "previous.txt").write_text("kept")
-    (out / MARKER).write_text("{}\n")                     # a previous soilwater result
+    (out / MARKER).write_text('{"files": ["previous.txt"]}\n')  # a previous result
     args = ["run", "unconfined-compression", "--method", "efg", "--out", str(out)]
     status = main(args + sum((["--set", o] for o in overrides), []))
     err = capsys.readouterr().err.strip().splitlines()
