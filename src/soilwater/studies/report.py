@@ -202,9 +202,10 @@ def provenance(name, saved, changed, rerun="soilwater report --only {name}"):
     if changed:
         shown = ", ".join(f"`{p}`" for p in changed[:3]) + (
             f" and {len(changed) - 3} more" if len(changed) > 3 else "")
+        why = (f"code it runs has changed since ({shown})" if "modules" in meta else
+               "it records no list of the code it runs (made before sections kept one)")
         return (f"**Stale**: section `{name}` was made from code `{meta['code'][:7]}` on "
-                f"{meta['made']}; code it runs has changed since ({shown}): rerun "
-                f"`{rerun.format(name=name)}`.")
+                f"{meta['made']}; {why}: rerun `{rerun.format(name=name)}`.")
     solvers = ", ".join(f"`{s}/`" for s in meta.get("solvers", ())) or "no solver"
     return (f"*Section `{name}`: made from code `{meta['code'][:7]}` (its "
             f"{len(meta['modules'])} modules and data files: shared library, {solvers}, its "
