@@ -12,8 +12,6 @@ Nothing fails with a traceback. Exit status:
   command killed by SIGPIPE.
 """
 
-import argparse
-import math
 import multiprocessing
 import os
 import signal
@@ -21,6 +19,7 @@ import sys
 import threading
 from contextlib import contextmanager
 
+from soilwater.arguments import MAX_OCR, MAX_POINTS, Parser, finite, ocr, points
 from soilwater.errors import SoilwaterError
 
 #: Exit status when standard output is closed early: 128 + SIGPIPE, as the shell reports.
@@ -138,63 +137,12 @@ def interruptible():
             signal.signal(signum, action)
 
 
-class _Once(argparse.Action):
-    """Store an option's value, refusing the option given twice (argparse would keep the
-    last silently: ``--out a --out b``)."""
-
-    def __call__(self, parser, namespace, values, option_string=None):
-        given = namespace.__dict__.setdefault("_given", set())
-        if self.dest in given:
-            parser.error(f"{option_string} is given twice: give it once")
-        given.add(self.dest)
-        setattr(namespace, self.dest, values)
-
-
-class _Parser(argparse.ArgumentParser):
-    """An argument parser whose options taking one value refuse to be repeated
-    (:class:`_Once`); its subcommands' parsers are of this class too."""
-
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
-        self.register("action", None, _Once)
-        self.register("action", "store", _Once)
-
-
-def _finite(text):
-    """A finite float (``--strain``, ``--ocr``): nan and inf are refused."""
-    value = float(text)
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
-    return value
-
-
-def _ocr(text):
-    """An overconsolidation ratio: finite, at most :data:`MAX_OCR`."""
-    value = _finite(text)
-    if value > MAX_OCR:
-        raise argparse.ArgumentTypeError(f"{text} is past {MAX_OCR:g}, no soil's ratio "
-                                         "(p'c0 would swamp every other stress)")
-    return value
-
-
-def _points(text):
-    """Output rows of ``soilwater path``: a whole number from 1 to :data:`MAX_POINTS`."""
-    value = int(text)
-    if not 1 <= value <= MAX_POINTS:
-        raise argparse.ArgumentTypeError(f"{text} must be from 1 to {MAX_POINTS}")
-    return value
-
-
-#: Bounds of ``soilwater path``'s ``--ocr`` and ``--points``.
-MAX_OCR, MAX_POINTS = 1e4, 1_000_000
-
-
 def _parser():
     from soilwater.methods import METHODS
     from soilwater.material.driver import TESTS
     from soilwater.targets import MARKER
 
-    parser = _Parser(
+    parser = Parser(
         prog="soilwater",
         description="EFG and FEM side by side on soil-water coupled problems.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -230,12 +178,12 @@ def _parser():
     p.add_argument("material", help="preset name (table1) or TOML file with [material]")
     p.add_argument("--test", required=True, choices=list(TESTS), metavar="NAME",
                    help="one of: " + ", ".join(TESTS))
-    p.add_argument("--strain", required=True, type=_finite,
+    p.add_argument("--strain", required=True, type=finite,
                    help="final axial strain (shear strain for simple shear), positive")
-    p.add_argument("--ocr", type=_ocr, help="isotropic overconsolidation ratio p'c0/p'0, "
+    p.add_argument("--ocr", type=ocr, help="isotropic overconsolidation ratio p'c0/p'0, "
                    f"1 to {MAX_OCR:g}")
     p.add_argument("--model", choices=["original", "modified"], help="Cam-clay variant")
-    p.add_argument("--points", type=_points, default=200,
+    p.add_argument("--points", type=points, default=200,
                    help=f"output rows, 1 to {MAX_POINTS} (default 200)")
     p.add_argument("--out", required=True, help="CSV file: step, eps_a, eps_v, p, q, pc")
     p.set_defaults(func=_path)
