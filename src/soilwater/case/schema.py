@@ -362,6 +362,8 @@ def apply_override(data, text):
 
     Raises
     ------
+    TypeError
+        ``text`` is not a string.
     InputError
         A malformed override, or one that descends into a value.
 
@@ -376,6 +378,9 @@ def apply_override(data, text):
     >>> data
     {'boundary': {'a.b': {'water': 'drained'}}}
     """
+    if not isinstance(text, str):
+        raise TypeError(f"an override must be a string 'section.key=value', e.g. "
+                        f"\"material.permeability=1e-6\", not {type(text).__name__}")
     key, sep, value = text.partition("=")
     path = _key_path(key) if sep else []
     require(sep and path and all(path), f"override {text!r}: write section.key=value, "
@@ -383,8 +388,10 @@ def apply_override(data, text):
             "boundary.\"a.b\".water=drained)")
     try:
         value = tomllib.loads(f"v = {value}")["v"]
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, ValueError):    # ValueError: an integer too long
         value = value.strip()
+    require(value != {}, f"override {text!r} sets an empty table, which would drop every "
+            f"key of {key.strip()}: set its keys one at a time, e.g. {key.strip()}.KEY=VALUE")
     table = data
     for depth, part in enumerate(path[:-1]):
         table = table.setdefault(part, {})

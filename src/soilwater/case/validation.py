@@ -26,6 +26,7 @@ from soilwater.case.time_validation import read_loading, read_time
 from soilwater.efg.settings import (CELLS, CORRECTIONS, DEFAULT_SCALE, ESSENTIAL,
                                     INTEGRATIONS, STABILISATIONS, EFGSettings, Weight)
 from soilwater.errors import InputError, require
+from soilwater.material.camclay import MAX_OCR
 from soilwater.fem.settings import REMESH, FEMSettings
 from soilwater.material.fluid import PERMEABILITY_LAWS, Fluid
 from soilwater.material.presets import FLUID_KEYS, material_from_spec, parameters
@@ -248,7 +249,8 @@ def _initial(table):
     require(surcharge >= 0, f"initial.surcharge = {surcharge} must be >= 0 (kPa, "
             "compression positive)")
     ocr = number(table, "ocr", "initial", 1.0)
-    require(ocr >= 1, f"initial.ocr = {ocr} must be at least 1")
+    require(1 <= ocr <= MAX_OCR, f"initial.ocr = {ocr} must lie in [1, {MAX_OCR:g}] (no "
+            "soil is more overconsolidated)")
     return Initial(value, start, surcharge, k0, ocr)
 
 
