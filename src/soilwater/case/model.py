@@ -262,13 +262,14 @@ class Case:
         """:meth:`~soilwater.case.boundary.Edge.at` of edge ``side`` at initial positions
         ``points`` (P, 2) [m] on it, segment ends widened by
         :data:`~soilwater.case.boundary.SEGMENT_TOLERANCE` times the smallest spacing (a
-        mesh's boundary groups have no segments)."""
+        mesh's boundary group has at most its whole segment, which every point is on)."""
         return getattr(self.boundary, side).at(along(side, points),
                                                SEGMENT_TOLERANCE * min(self.spacing))
 
     def segment_nodes(self):
         """Indices into :meth:`nodes` of each named segment's nodes (the boundary nodes of
-        its edge within ``[from, to]``), in
+        its edge within ``[from, to]``; a mesh group's vertices for a
+        :attr:`~soilwater.case.boundary.Segment.whole` one), in
         :meth:`~soilwater.case.boundary.Boundary.segments` order."""
         nodes = self.nodes()
         loop = self.boundary_loop()
@@ -277,6 +278,9 @@ class Case:
                 "top": (1, g.height)}
         out = []
         for side, seg in self.boundary.segments():
+            if seg.whole:
+                out.append(g.mesh.group_nodes(side))
+                continue
             axis, value = line[side]
             p = nodes[loop]
             on = (np.abs(p[:, axis] - value) <= tol) & seg.contains(along(side, p), tol)

@@ -110,7 +110,9 @@ Schema (every case has the same one; unknown keys are an error)::
     [boundary.left]                   # each of left, right, bottom, top exactly once;
                                       # on a mesh, any of its boundary groups (the others
                                       # free, impermeable, unloaded), no segments, no
-                                      # rigid, roller on vertical or horizontal groups
+                                      # rigid, roller on vertical or horizontal groups;
+                                      # a group may be a footing (uy = "footing" with
+                                      # settlement_rate or force, as a segment below)
     ux = "fixed"                      # "free" (default), "fixed", "prescribed", "rigid"
     uy = "free"
     # displacement = "roller"         # shorthand instead of ux/uy: "roller" (normal
@@ -218,8 +220,8 @@ Boundary kinds of a displacement component:
   uniform vertical displacement (a frictionless rigid plate, Mandel's problem) whose total
   force is ``traction[1] x load factor x (initial edge length)`` per unit thickness.
 
-* ``footing`` (``uy`` of a named segment of the top or bottom edge): a rigid strip
-  footing, the segment's uy moving as one body; ``settlement_rate`` imposes uy =
+* ``footing`` (``uy`` of a named segment of the top or bottom edge, or of a mesh's
+  boundary group): a rigid strip footing, the segment's (group's) uy moving as one body; ``settlement_rate`` imposes uy =
   -rate x t on it, ``force`` lets it settle by one unknown whose total force is
   ``-force x load factor`` (the ``rigid`` plate's machinery). With ``ux = "fixed"`` it
   is rough (no sideways motion), with ``ux = "free"`` smooth. Coupled analyses only.
@@ -233,6 +235,12 @@ mean downward displacement of a segment that is no footing) and ``pressure@NAME`
 (kPa, compression positive: the vertical force the boundary exerts on the soil there, in
 excess of the initial state, over the current width; see
 :func:`soilwater.nonlinear.history.segment_columns`).
+
+On a mesh, a boundary group that is a footing, has a ``prescribed`` component or
+carries a traction adds the same two columns under its own name: ``settlement@NAME`` the
+footing's settlement or the mean downward displacement of its vertices, ``pressure@NAME``
+the reaction over the current distance between its end vertices plus the applied ``-ty``
+(times the load factor, mean over its vertices).
 
 At a corner both edges' conditions apply (a segment that reaches the corner counts
 there); two different non-free kinds on the same

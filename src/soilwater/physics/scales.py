@@ -122,11 +122,12 @@ class Scales:
 
 
 def _footing_stresses(case, modulus):
-    """Stress scales of the footings [kPa]: ``force / (to - from)`` under load control,
-    ``modulus x rate x time.end / height`` (the oedometric stress of the final
-    settlement over the depth) under velocity control."""
-    for _, seg in case.boundary.segments():
+    """Stress scales of the footings [kPa]: ``force / width`` under load control (``to -
+    from``, or a mesh group's length), ``modulus x rate x time.end / height`` (the
+    oedometric stress of the final settlement over the depth) under velocity control."""
+    for side, seg in case.boundary.segments():
         if seg.load_controlled:
-            yield abs(seg.force) / (seg.end - seg.start)
+            yield abs(seg.force) / (case.edge_length(side) if seg.whole
+                                    else seg.end - seg.start)
         elif seg.footing:
             yield modulus * abs(seg.settlement_rate) * case.time.end / case.geometry.height
