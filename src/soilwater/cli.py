@@ -273,7 +273,7 @@ def _show(args):
 def _run(args):
     from soilwater.case.loader import load_case
     from soilwater.methods import solve
-    from soilwater.targets import claim
+    from soilwater.locks import claim
 
     with claim(args.out, what="--out"):  # before any work; held until written
         case = load_case(args.case, args.set)

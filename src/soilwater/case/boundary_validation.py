@@ -61,8 +61,8 @@ def _require_supports(boundary, length):
     ``fixed``, ``prescribed`` and ``exact`` restrain a component, and so does a
     velocity-controlled footing (:class:`~soilwater.case.boundary.Segment`) its uy; a
     ``rigid`` plate (or a load-controlled footing) lets its edge settle. It would stop
-    rotation, but never decides: the uy that stops y translation is on a horizontal edge (stopping rotation
-    too) or on a vertical one, which may not meet the plate's edge with another kind.
+    rotation, but never decides: the uy that stops y translation is on a horizontal edge
+    (stopping rotation too) or on a vertical one, which may not meet the plate's edge with another kind.
     """
     kinds = {side: edge.kinds(length[side]) for side, edge in boundary.items()}
     ux = {side for side, (kx, _) in kinds.items() if kx & set(_RESTRAINED)}

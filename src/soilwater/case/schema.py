@@ -221,8 +221,8 @@ Boundary kinds of a displacement component:
   force is ``traction[1] x load factor x (initial edge length)`` per unit thickness.
 
 * ``footing`` (``uy`` of a named segment of the top or bottom edge, or of a mesh's
-  boundary group): a rigid strip footing, the segment's (group's) uy moving as one body; ``settlement_rate`` imposes uy =
-  -rate x t on it, ``force`` lets it settle by one unknown whose total force is
+  boundary group): a rigid strip footing, the segment's (group's) uy moving as one
+  body; ``settlement_rate`` imposes uy = -rate x t on it, ``force`` lets it settle by one unknown whose total force is
   ``-force x load factor`` (the ``rigid`` plate's machinery). With ``ux = "fixed"`` it
   is rough (no sideways motion), with ``ux = "free"`` smooth. Coupled analyses only.
 
