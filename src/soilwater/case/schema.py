@@ -222,8 +222,9 @@ Boundary kinds of a displacement component:
 
 * ``footing`` (``uy`` of a named segment of the top or bottom edge, or of a mesh's
   boundary group): a rigid strip footing, the segment's (group's) uy moving as one
-  body; ``settlement_rate`` imposes uy = -rate x t on it, ``force`` lets it settle by one unknown whose total force is
-  ``-force x load factor`` (the ``rigid`` plate's machinery). With ``ux = "fixed"`` it
+  body; ``settlement_rate`` imposes uy = -rate x t on it, ``force`` lets it settle by
+  one unknown whose total force is ``-force x load factor`` (the ``rigid`` plate's
+  machinery). With ``ux = "fixed"`` it
   is rough (no sideways motion), with ``ux = "free"`` smooth. Coupled analyses only.
 
 A named segment overrides its edge's kinds (and, if given, its water condition) where
