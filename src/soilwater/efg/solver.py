@@ -206,8 +206,8 @@ def _history_row(model, points, t, dt, info):
     records are the summary's ``rebuild_records``); after a rebuild the cells measured
     are the new ones."""
     case = model.case
-    nodes0 = case.nodes()
-    level = nodes0[:, 1] >= case.geometry.height * (1 - 1e-9)   # the top: boundary facets
+    nodes0 = model.origin
+    level = case.nodes()[:, 1] >= case.geometry.height * (1 - 1e-9)   # the top: facets
     top = model.loop[level[model.loop] & level[np.roll(model.loop, -1)]]   # at its height
     probes = ()
     if len(points.probes):
@@ -215,7 +215,7 @@ def _history_row(model, points, t, dt, info):
         shape = ShapeFunctions.build(points.nodes, points.probes, s.weight_p, s.scale_p,
                                      key="efg.scale_p")
         probes = zip([pr.name for pr in case.probes], shape.phi @ points.p,
-                     points.probes - [pr.point for pr in case.probes])
+                     points.probes - model.probes0)
     uniqueness = points.uniqueness if case.diagnostics.uniqueness else None
     segments = [(seg, points.nodes[k], nodes0[k], force,
                  points.plate if seg.load_controlled else None)
@@ -241,7 +241,7 @@ def _snapshot(model, points, t):
         stress, stretching = (nodal_average(points.cells, n, f) for f in (stress, stretching))
         state = {k: nodal_average(points.cells, n, v) for k, v in state.items()}
     p, q = invariants(stress)
-    data = {"u": points.nodes - model.case.nodes(), "p_w": at.phi @ points.p,
+    data = {"u": points.nodes - model.origin, "p_w": at.phi @ points.p,
             "p_eff": p, "q": q, "stress": stress, "stretching": stretching,
             "support_radius": at.support}
     data.update(state)

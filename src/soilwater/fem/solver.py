@@ -163,7 +163,7 @@ def _history_row(model, current, t, dt, info):
     case, topology = model.case, current.topology
     top = model.space.mesh0.p[1] > case.geometry.height * (1 - 1e-9)
     probes = ()
-    nodes0 = model.space.mesh0.p.T
+    nodes0 = model.origin
     if topology.probes is not None:     # vertex displacements, linear between vertices
         moved = topology.probes @ (current.vertices - nodes0)
         probes = zip([pr.name for pr in case.probes], topology.probes @ current.p, moved)
@@ -196,7 +196,7 @@ def _snapshot(model, current, t):
     quantities = {"p_eff": p, "q": q, "stress": current.stress,
                   "stretching": current.stretching, **current.state}
     velocity = current.velocity.reshape(2, -1).T
-    data = {"u": current.vertices - mesh0.p.T, "p_w": current.p[:N],
+    data = {"u": current.vertices - model.origin, "p_w": current.p[:N],
             "velocity": velocity[:N]}
     volume = current.weights.reshape(E, -1)
     share = np.repeat(volume.sum(1), cells.shape[0])
