@@ -58,6 +58,7 @@ configuration is :mod:`soilwater.efg.discretisation`'s, its Newton system
 :mod:`soilwater.efg.system`'s, the state kept between steps :mod:`soilwater.efg.model`'s.
 """
 
+from dataclasses import replace
 from functools import partial
 
 import numpy as np
@@ -78,6 +79,7 @@ from soilwater.geometry.quality import cell_quality
 from soilwater.geometry.triangulation import delaunay_triangles
 from soilwater.efg.system import System
 from soilwater.material.kinematics import invariants
+from soilwater.nonlinear.gravity_start import switch_on
 from soilwater.nonlinear.history import history_row, timed
 from soilwater.nonlinear.march import run
 from soilwater.nonlinear.newton import newton
@@ -105,17 +107,38 @@ def solve(case, progress=True):
         (:func:`soilwater.efg.settings.check`) and other invalid settings.
     """
     check(case.efg)
-    model = Model.build(case)
-    result = run(case, "efg", case.efg.to_dict(), _initial_points(model),
+    model, start, gravity = _start(Model.build(case), progress)
+    result = run(case, "efg", case.efg.to_dict(), start,
                  partial(_step, model), partial(_history_row, model),
                  partial(_snapshot, model),
                  {"dofs": 3 * len(case.nodes()), "stabilisation_beta": model.beta,
                   "stabilisation_tau": model.tau,
-                  **factors(model, case.times())}, progress)
+                  **factors(model, case.times()), **gravity}, progress)
     if model.gauss:
         records = result.summary.setdefault("rebuild_records", [])
         result.summary["rebuilds"] = len(records)
     return result
+
+
+def _start(model, progress):
+    """The model, its points at t = 0 and the summary's entries of the start: the case's
+    initial points, or after a gravity start
+    (:func:`soilwater.nonlinear.gravity_start.switch_on`) the phase's end with p_w = 0,
+    no plate settlement, no stretching and no rebuilds counted, its gaps (the supports'
+    reactions) kept, and the displacements measured from there (``origin``,
+    ``probes0``); ``gravity_start`` (the phase's summary and its largest displacement
+    [m]) in the summary."""
+    start = _initial_points(model)
+    case = model.case
+    if case.initial.stress != "gravity":
+        return model, start, {}
+    end, phase = switch_on(model, _initial_points, _step, progress,
+                           f"gravity efg {case.name}")
+    settled = replace(end, p=start.p, plate=0.0, stretching=np.zeros_like(end.stretching),
+                      cells=end.cells._replace(rebuilds=()))
+    moved = np.linalg.norm(end.nodes - model.origin, axis=1).max()
+    return (replace(model, origin=end.nodes.copy(), probes0=end.probes.copy()), settled,
+            {"gravity_start": {**phase, "largest_displacement": float(moved)}})
 
 
 def _initial_points(model):
