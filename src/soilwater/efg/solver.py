@@ -21,9 +21,12 @@ is halved up to :data:`soilwater.nonlinear.march.MAX_CUTS` times before the run 
 with one clear error.
 
 The initial state (:func:`soilwater.physics.geostatic.initial_state`, uniform or geostatic)
-is set at the nodes, and its total stress ``sigma0 . n`` at each boundary point's initial
-position loads the boundary, with the edge tractions; under gravity the buoyant weight at
-the integration points (:mod:`soilwater.physics.geostatic`) loads the domain.
+is set at the material points, and its total stress ``sigma0 . n`` at each boundary
+point's initial position loads the boundary, with the edge tractions; under gravity the
+buoyant weight at the integration points (:mod:`soilwater.physics.geostatic`) loads the
+domain. A gravity start loads the uniform state with its weight, drained, by this
+solver's own steps (:mod:`soilwater.nonlinear.gravity_start`), and the run starts where
+that left the material points, the nodes and the boundary gaps.
 
 Where the material state lives is ``efg.integration``. With ``"gauss"`` it lives at the
 Gauss points of Delaunay triangles of the nodes, which move with the nodes: each step

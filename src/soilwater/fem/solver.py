@@ -12,7 +12,10 @@ stress ``sigma0 . n`` on every boundary facet (sigma0 at the facet point's initi
 :func:`soilwater.physics.geostatic.total_stress`: uniform or geostatic) plus the edge
 traction x load factor on free components (a dead load on the start-of-step facets), and
 under gravity the buoyant weight of the elements (:mod:`soilwater.physics.geostatic`). The
-initial state is set at the quadrature points' initial positions.
+initial state is set at the quadrature points' initial positions; a gravity start then
+loads it with its weight, drained, by this solver's own steps
+(:mod:`soilwater.nonlinear.gravity_start`), and the run starts where that left the
+quadrature points and the mesh.
 
 Newton's method (:func:`soilwater.nonlinear.newton.newton`) starts from the last step's
 velocity x dt (``L x`` at the first step). Convergence, cut-back and scales are those of
