@@ -97,15 +97,24 @@ Schema (every case has the same one; unknown keys are an error)::
 
     [initial]                         # optional
     pore_pressure = "balance"         # a number (default 0) or "balance": p_w0 = -p'0/alpha,
-                                      # total stress zero; sigma'0 = -p'0 I (material p0)
+                                      # total stress zero; sigma'0 = -p'0 I (material p0);
+                                      # a number with a geostatic start, 0 with a
+                                      # gravity start
     stress = "uniform"                # or "geostatic": sigma'v from the buoyant weight
                                       # under the surcharge, sigma'h = k0 sigma'v, e from
-                                      # the compression line (soilwater.physics.geostatic)
+                                      # the compression line (soilwater.physics.geostatic;
+                                      # a level top only); or "gravity" (needs [gravity],
+                                      # any top, e.g. a slope): the uniform state takes
+                                      # its self-weight drained before t = 0, the run
+                                      # starts on the configuration it settled to with
+                                      # u = 0 and p_w = 0 (soilwater.nonlinear.gravity_start)
     surcharge = 10.0                  # geostatic: kPa >= 0 on the top, in equilibrium at
                                       # t = 0 (> 0 for Cam-clay: p' > 0 at the top)
     k0 = "nc"                         # geostatic: in (0, 1], or "nc" (the material's
                                       # normally consolidated value)
     ocr = 1.0                         # geostatic: vertical overconsolidation ratio >= 1
+    increments = 10                   # gravity: equal steps of the self-weight, in
+                                      # [1, 1000] (default 10; a step that fails is halved)
 
     [boundary.left]                   # each of left, right, bottom, top exactly once;
                                       # on a mesh, any of its boundary groups (the others
@@ -302,7 +311,7 @@ KEYS = {
     "geometry": ("shape", "width", "height", "mesh"),
     "discretisation": ("nx", "ny", "x", "y", "layout", "jitter", "seed"),
     "diagnostics": ("uniqueness",),
-    "initial": ("pore_pressure", "stress", "surcharge", "k0", "ocr"),
+    "initial": ("pore_pressure", "stress", "surcharge", "k0", "ocr", "increments"),
     "gravity": ("g",),
     "edge": ("ux", "uy", "displacement", "traction", "water"),
     "segment": ("from", "to", "ux", "uy", "water", "settlement_rate", "force"),
@@ -330,6 +339,8 @@ SCALES = (1.0, 1e3)
 """Accepted range of the MLS support scale factors ``efg.scale_u`` and ``scale_p``."""
 MAX_TRIANGLE_ORDER = 19
 """Highest degree of scikit-fem's triangle rules (``efg.order`` with Delaunay cells)."""
+MAX_INCREMENTS = 1000
+"""Most increments of a gravity start's self-weight (``initial.increments``)."""
 _NORMAL = {"left": "ux", "right": "ux", "bottom": "uy", "top": "uy"}
 
 
