@@ -198,3 +198,13 @@ def test_a_snapshots_mesh_carries_its_time(result):
     for i in (0, -1):
         mesh = result.mesh(i)
         assert mesh.field_data["TimeValue"].tolist() == [result.snapshots[i].time]
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: soilwater.load_case("terzaghi", 5), "overrides are strings .* not int"),
+    (lambda: soilwater.load_case("terzaghi", {"time.end": 1}), "overrides are strings .* "
+                                                               "not dict"),
+    (lambda: soilwater.load_case("terzaghi").replace(5), "an override must be a string")])
+def test_overrides_of_the_wrong_type_are_a_type_error(call, message):
+    with pytest.raises(TypeError, match=message):
+        call()

@@ -85,7 +85,9 @@ def test_a_user_slope_runs_in_every_triangle_method():
     every triangle method runs it, and each one's crest settlement and pore pressure
     under the crest lie within 6 % of fem-th's (measured: efg 4.6 % stiffer, the most,
     where the soils meet and at the load's edge; efg-paper 1.4 %, fem-p1p1-stab 0.9 %;
-    pore pressures within 2.2 %)."""
+    pore pressures within 2.2 %). The loaded crest has its own columns: pressure@crest
+    the applied 50 kPa times the load factor (to 1e-6 of it), settlement@crest the mean
+    settlement of its vertices, within 6 % of fem-th's too."""
     case = load_case(DATA / "slope.toml")
     assert case.geometry.mesh.groups == ("base", "crest", "face", "ground", "left", "right")
     assert case.geometry.mesh.regions == ("clay", "fill")
@@ -98,6 +100,11 @@ def test_a_user_slope_runs_in_every_triangle_method():
         last = history.iloc[-1]
         assert last["settlement"] == pytest.approx(ref["settlement"], rel=0.06), method
         assert last["p_w@under"] == pytest.approx(ref["p_w@under"], rel=0.06), method
+        assert last["settlement@crest"] == pytest.approx(ref["settlement@crest"],
+                                                         rel=0.06), method
+        np.testing.assert_allclose(history["pressure@crest"],
+                                   50 * np.minimum(history["time"] / 10, 1), rtol=0,
+                                   atol=5e-5, err_msg=method)
 
 
 def test_a_geo_file_is_meshed_by_gmsh():
@@ -307,3 +314,75 @@ def test_the_resolved_case_names_the_mesh_file_and_reloads(tmp_path):
     assert data["geometry"] == {"shape": "mesh", "mesh": str((DATA / "slope.msh").resolve())}
     assert data["discretisation"] == {}
     assert len(case.replace("time.steps=2").nodes()) == len(case.nodes())
+
+
+FOOTING_GRID = ("discretisation.x=[[1.0, 2], [10.0, 9]]",
+                "discretisation.y=[[9.0, 9], [10.0, 2]]", "time.steps=5", "time.end=5")
+
+
+def _footing_on_mesh(tmp_path, footing):
+    """The built-in strip footing (coarse, to 0.05 B) and the same soil as a .msh whose
+    footing (top facets with x <= 0.5 m) is the physical curve ``pad``; ``footing`` is the
+    group's table."""
+    grid = load_case("strip-footing", FOOTING_GRID)
+    mesh = initial_mesh(grid, "fem-p1p1")
+    points, loop = mesh.p.T, grid.boundary_loop()
+    ends = np.stack([loop, np.roll(loop, -1)], axis=1)
+    edge = np.array(grid.geometry.edges)[grid.geometry.edge_of(points[ends[:, 0]],
+                                                               points[ends[:, 1]])]
+    edge[(edge == "top") & (points[ends].max(axis=1)[:, 0] <= 0.5 + 1e-9)] = "pad"
+    write_msh(tmp_path / "soil.msh", points, mesh.t.T,
+              {name: ends[edge == name] for name in ("left", "right", "bottom", "top", "pad")})
+    data = grid.to_dict()
+    data["geometry"] = {"mesh": str(tmp_path / "soil.msh")}
+    data.pop("discretisation")
+    data["boundary"]["top"].pop("footing")
+    data["boundary"]["pad"] = footing
+    return grid, case_from_dict(data)
+
+
+def test_a_footing_on_a_mesh_group_is_the_rectangle_s_footing(tmp_path):
+    """A rigid footing given as a mesh's boundary group (``uy = "footing"``) is the named
+    segment of the rectangle it replaces: the same settlement@NAME and pressure@NAME
+    history in fem-th and efg-paper (same nodes and constraints, to 1e-9 of the pressure),
+    and its table reloads from the resolved case."""
+    grid, mesh = _footing_on_mesh(tmp_path, {"ux": "free", "uy": "footing",
+                                             "settlement_rate": 0.01})
+    (_, seg), = mesh.boundary.segments()
+    assert seg.whole and seg.footing and mesh.to_dict()["boundary"]["pad"]["uy"] == "footing"
+    assert case_from_dict(mesh.to_dict()) == mesh
+    for method in ("fem-th", "efg-paper"):
+        a = soilwater.solve(mesh, method, progress=False).history
+        b = soilwater.solve(grid, method, progress=False).history
+        np.testing.assert_allclose(a["settlement@pad"], b["settlement@footing"], rtol=1e-12)
+        scale = np.abs(b["pressure@footing"]).max()
+        assert scale > 0
+        np.testing.assert_allclose(a["pressure@pad"], b["pressure@footing"], rtol=0,
+                                   atol=1e-9 * scale)
+
+
+def test_a_load_controlled_footing_on_a_mesh_group_carries_its_force(tmp_path):
+    """A footing group under load control (``force``) settles by one unknown whose
+    pressure@NAME is the force over the footing's current width at every level: within
+    1 % of force / B (the smooth footing's ends spread by 0.2 % on this mesh), in
+    fem-p1p1-stab and efg."""
+    force = 2.0
+    _, mesh = _footing_on_mesh(tmp_path, {"uy": "footing", "force": force})
+    for method in ("fem-p1p1-stab", "efg"):
+        history = soilwater.solve(mesh, method, progress=False).history
+        assert history["settlement@pad"].iloc[-1] > 0, method
+        np.testing.assert_allclose(history["pressure@pad"].iloc[1:], force / 0.5, rtol=1e-2,
+                                   err_msg=method)
+
+
+@pytest.mark.parametrize("pad, message", [
+    ({"uy": "footing"}, "boundary.pad.uy = 'footing' needs exactly one of settlement_rate"),
+    ({"uy": "footing", "settlement_rate": 0.01, "traction": [0.0, -1.0]},
+     "boundary.pad.traction: a footing carries no traction"),
+    ({"force": 1.0}, "boundary.pad.force applies to a footing only"),
+    ({"ux": "rigid"}, "boundary.pad: 'rigid' applies to a rectangle's top or bottom edge: "
+                      "use \"footing\""),
+])
+def test_a_footing_group_s_bad_table_is_refused_in_one_line(tmp_path, pad, message):
+    with pytest.raises(InputError, match=re.escape(message)):
+        _footing_on_mesh(tmp_path, pad)

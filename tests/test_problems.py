@@ -395,7 +395,7 @@ def test_unsupported_boundaries_are_refused(edges, why):
 def test_builtin_boundaries_are_supported_and_checked(name):
     assert load_case(name).boundary == BUILTIN[name].boundary
     segments = [f"boundary.{side}.{seg.name}.ux=free"
-                for side, seg in BUILTIN[name].boundary.segments()]
+                for side, seg in BUILTIN[name].boundary.segments() if not seg.whole]
     free = [f"boundary.{side}.displacement=free" for side in BUILTIN[name].geometry.edges]
     with pytest.raises(InputError, match="not supported along x"):
         load_case(name, free + segments)
@@ -486,3 +486,33 @@ def test_the_schema_shows_the_efg_defaults():
     block = doc[start:doc.index("[fem]", start)]
     shown = tomllib.loads("\n".join(line.strip() for line in block.splitlines()))["efg"]
     assert shown == EFGSettings().to_dict()
+
+
+@pytest.mark.parametrize("change, message", [
+    ("loading.load=[[5, 1], [10, 2]]", r"loading.load starts at t = 5 s: give the factor at "
+                                       r"t = 0 too, e.g. \[\[0, 0\], \[5, 1\]\]"),
+    ("loading.load=[[0, 0]]", "loading.load: give two or more"),
+    ("loading.load=[[5, 1]]", "loading.load: give two or more"),
+    ("boundary.top={}", "sets an empty table, which would drop every key of boundary.top"),
+    ("material.model=vonmises", "material.model = 'vonmises' is unknown: use one of "
+                                "elastic, original, modified"),
+    ("time.output=[]", r"time.output = \[\] names no time"),
+    ('time.output="1 d"', r"time.output = '1 d' must be a list of times, e.g. \['1 d'\]"),
+    ("material.ocr=1e300", r"material.ocr = 1e\+300 must lie in \[1, 10000\]")])
+def test_inputs_a_run_would_misread_are_refused_in_one_line(change, message):
+    """Each of these was accepted and misread (a load table starting late applied in full
+    from t = 0+, an empty table dropping an edge's load and drainage, a one-point table
+    meaning no load) or refused for the wrong reason."""
+    case = "soil-column" if "ocr" in change else "terzaghi"
+    with pytest.raises(InputError, match=message):
+        load_case(case, [change])
+
+
+def test_a_case_with_a_number_past_pythons_digits_is_one_line(tmp_path):
+    path = tmp_path / "long.toml"
+    path.write_text("x = " + "9" * 5000 + "\n")
+    with pytest.raises(InputError, match="holds a number that cannot be read .*write it "
+                       "with an exponent"):
+        load_case(path)
+    with pytest.raises(InputError, match="the case is empty"):
+        load_case("")

@@ -14,8 +14,10 @@ import pyvista
 from soilwater.methods import METHODS
 from soilwater.errors import InputError
 from soilwater.case.loader import load_case
-from soilwater.targets import (MARKER, REPORT_MARKER, check_output_folder,
-                               check_report_folder, claim, mark_report_folder)
+from soilwater.locks import claim
+from soilwater.studies.harness.folder import (REPORT_MARKER, check_report_folder,
+                                              mark_report_folder)
+from soilwater.targets import MARKER, check_output_folder
 
 FAST = ["time.steps=3", "time.end=1.0"]  # terzaghi in three steps: about a second
 
@@ -174,7 +176,7 @@ def test_a_result_whose_marker_lists_no_files_is_known_by_its_names(tmp_path):
 
 
 _HOLD = """import sys
-from soilwater.targets import claim
+from soilwater.locks import claim
 with claim(sys.argv[1]):
     print("held", flush=True)
     sys.stdin.read()

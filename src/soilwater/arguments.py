@@ -36,7 +36,10 @@ def finite(text):
 
 
 def ocr(text):
-    """An overconsolidation ratio: finite, at most :data:`MAX_OCR`."""
+    """An overconsolidation ratio: finite, at most
+    :data:`soilwater.material.camclay.MAX_OCR`."""
+    from soilwater.material.camclay import MAX_OCR
+
     value = finite(text)
     if value > MAX_OCR:
         raise argparse.ArgumentTypeError(f"{text} is past {MAX_OCR:g}, no soil's ratio "
@@ -52,5 +55,5 @@ def points(text):
     return value
 
 
-#: Bounds of ``soilwater path``'s ``--ocr`` and ``--points``.
-MAX_OCR, MAX_POINTS = 1e4, 1_000_000
+#: The most output rows of ``soilwater path`` (``--points``).
+MAX_POINTS = 1_000_000

@@ -19,7 +19,7 @@ import sys
 import threading
 from contextlib import contextmanager
 
-from soilwater.arguments import MAX_OCR, MAX_POINTS, Parser, finite, ocr, points
+from soilwater.arguments import MAX_POINTS, Parser, finite, ocr, points
 from soilwater.errors import SoilwaterError
 
 #: Exit status when standard output is closed early: 128 + SIGPIPE, as the shell reports.
@@ -139,6 +139,7 @@ def interruptible():
 
 def _parser():
     from soilwater.methods import METHODS
+    from soilwater.material.camclay import MAX_OCR
     from soilwater.material.driver import TESTS
     from soilwater.targets import MARKER
 
@@ -272,7 +273,7 @@ def _show(args):
 def _run(args):
     from soilwater.case.loader import load_case
     from soilwater.methods import solve
-    from soilwater.targets import claim
+    from soilwater.locks import claim
 
     with claim(args.out, what="--out"):  # before any work; held until written
         case = load_case(args.case, args.set)

@@ -27,7 +27,8 @@ import pandas as pd
 
 from soilwater import fields
 from soilwater.errors import SoilwaterError
-from soilwater.targets import MARKER, check_output_folder, claim, naming, publish, write_csv
+from soilwater.locks import claim
+from soilwater.targets import MARKER, check_output_folder, naming, publish, write_csv
 
 #: Units of the history columns (:attr:`Result.units`), in the built-in cases' kPa, m, s
 #: (a case in other units keeps its stress, length and time units); ``-`` is
@@ -147,7 +148,7 @@ class Result:
 
         ``folder`` must pass :func:`soilwater.targets.check_output_folder`, when the
         call begins and again before it is replaced, and is held by
-        :func:`soilwater.targets.claim` meanwhile. Everything goes to a hidden temporary
+        :func:`soilwater.locks.claim` meanwhile. Everything goes to a hidden temporary
         sibling folder; only when it is complete does it take the place of ``folder`` (a
         previous result is renamed aside, the new one renamed in, the old one removed).
         On any failure, including KeyboardInterrupt, the temporary folder is removed and
@@ -168,7 +169,7 @@ class Result:
         Raises
         ------
         InputError
-            If ``folder`` is refused (:func:`soilwater.targets.claim`).
+            If ``folder`` is refused (:func:`soilwater.locks.claim`).
         SoilwaterError
             If a field holds NaN or infinity.
         """

@@ -3,22 +3,20 @@
 Nothing deletes a file or folder that soilwater did not write: a result folder holds the
 marker file :data:`MARKER`, which lists the files written with it, and
 :func:`check_output_folder` refuses any other target, and a previous result holding
-anything else; :func:`claim` keeps a second process from writing the same result folder.
-A report folder holds :data:`REPORT_MARKER` (:func:`check_report_folder`,
-:func:`mark_report_folder`). A single output file (``soilwater path``, ``soilwater
-infsup``) replaces only a file that soilwater wrote (:func:`check_output_file`), never
+anything else; :func:`soilwater.locks.claim` keeps a second process from writing the same
+result folder. A report folder is checked likewise
+(:mod:`soilwater.studies.harness.folder`). A single output file (``soilwater path``,
+``soilwater infsup``) replaces only a file that soilwater wrote (:func:`check_output_file`), never
 through a symbolic link. Every target is checked before any work, an error of the file
 system names its path (:func:`naming`), and what is written takes the user's umask
 (:func:`publish`).
 """
 
-import fcntl
 import json
 import os
 import re
 import tempfile
 from contextlib import contextmanager
-from importlib.metadata import version
 from pathlib import Path
 
 import numpy as np
@@ -33,14 +31,6 @@ MARKER = ".soilwater-output"
 #: The files of a result whose marker lists none (written before markers did).
 RESULT_FILES = re.compile(r"summary\.json|history\.csv|fields\.pvd|fields_\d{4,}\.vtu")
 
-#: File in every report folder soilwater writes (:func:`mark_report_folder`).
-REPORT_MARKER = ".soilwater-report"
-
-#: The first line of every REPORT.md soilwater writes (quick or full).
-REPORT_HEADING = "# soilwater report"
-
-#: Result folders locked by this process (:func:`claim`).
-_CLAIMED = set()
 #: The ``Software`` text of every PNG file soilwater writes: how it knows its own figures.
 SOFTWARE = "soilwater"
 
@@ -89,7 +79,7 @@ def _writable_parent(path, shown, what="--out"):
                          "name a folder you can write in")
 
 
-def _shown(path, folder):
+def shown_path(path, folder):
     """``path`` as the user gave it, and the resolved ``folder`` when they differ."""
     return str(path) if str(path) == str(folder) else f"{path} (= {folder})"
 
@@ -100,12 +90,12 @@ def _new_folder(what):
                                           if what.startswith("--") else "")
 
 
-def _target_folder(path, what, kind, fix):
+def target_folder(path, what, kind, fix):
     """Resolve ``path`` (``~``, links, ``.`` and ``..``) as a ``kind`` folder to write,
     refusing the current or home folder or one holding them, a file, and a path under a
     file or a folder that cannot be written; returns the folder and how to show it."""
     folder = Path(path).expanduser().resolve()
-    shown = _shown(path, folder)
+    shown = shown_path(path, folder)
     for place, name in ((Path.cwd(), "current"), (Path.home(), "home")):
         place = place.resolve()
         if folder == place or folder in place.parents:
@@ -117,14 +107,14 @@ def _target_folder(path, what, kind, fix):
     return folder, shown
 
 
-def _listing(entries):
+def listing(entries):
     """Up to three entry names (a folder's with ``/``), sorted, and ``...`` for more."""
     names = sorted(e.name + ("/" if e.is_dir() and not e.is_symlink() else "")
                    for e in entries)
     return ", ".join(names[:3] + (["..."] if len(names) > 3 else []))
 
 
-def _entries(count):
+def count_entries(count):
     """``"1 entry"``, ``"2 entries"``."""
     return f"{count} {'entry' if count == 1 else 'entries'}"
 
@@ -180,7 +170,7 @@ def check_output_folder(path, what="folder"):
     soilwater.errors.InputError: --out . (= ...): the current folder or a folder holding it ...
     """
     fix = _new_folder(what)
-    folder, shown = _target_folder(path, what, "result folder, which is replaced whole",
+    folder, shown = target_folder(path, what, "result folder, which is replaced whole",
                                    fix)
     if not folder.is_dir() or not any(folder.iterdir()):
         return folder
@@ -190,198 +180,19 @@ def check_output_folder(path, what="folder"):
     foreign = _foreign(folder)
     if foreign:
         raise InputError(f"{what} {shown} is a previous result holding "
-                         f"{_entries(len(foreign))} soilwater did not write "
-                         f"({_listing(foreign)}), which replacing it would delete; move "
+                         f"{count_entries(len(foreign))} soilwater did not write "
+                         f"({listing(foreign)}), which replacing it would delete; move "
                          f"them out of it, or choose another {what}")
     return folder
 
 
-@contextmanager
-def claim(path, what="folder"):
-    """Hold the result folder ``path`` for this process while the block runs: checked
-    (:func:`check_output_folder`), then locked, so that a second process claiming it
-    meanwhile is refused at once.
-
-    The lock is the file ``.NAME.lock`` beside the folder, holding this process's id,
-    under an exclusive :func:`fcntl.flock`. It is removed when the block ends, by an
-    exception too; the system releases the lock of a process that dies, and a lock file
-    left behind is then taken over. Folders made to hold the lock are removed again if
-    nothing was written into them. A claim of a folder this process already holds
-    (:meth:`Result.write` inside the command's claim) is checked and yields at once.
-
-    Parameters
-    ----------
-    path : str or Path
-    what : str
-        How the caller's argument is named in a refusal (``"--out"`` from the command).
-
-    Yields
-    ------
-    Path
-        The resolved folder.
-
-    Raises
-    ------
-    InputError
-        If :func:`check_output_folder` refuses the folder, another process holds it, or
-        the folder's lock cannot be created there (naming ``path``).
-    """
-    folder = check_output_folder(path, what)
-    if folder in _CLAIMED:
-        yield folder
-        return
-    made = [p for p in (folder.parent, *folder.parent.parents) if not p.exists()]
-    lock = folder.parent / f".{folder.name}.lock"
-    try:
-        folder.parent.mkdir(parents=True, exist_ok=True)
-        fd = _lock(lock)
-    except OSError as err:
-        _remove_empty(made)
-        reason = err.strerror or err
-        raise InputError(f"{what} {_shown(path, folder)}: cannot be created ({reason}); "
-                         "name a folder you can write in") from None
-    if fd is None:
-        _remove_empty(made)
-        raise InputError(f"{what} {_shown(path, folder)} is being written by another "
-                         f"soilwater run ({_holder(lock)}); wait for it to end, or choose "
-                         f"another {what}")
-    _CLAIMED.add(folder)
-    try:
-        yield folder
-    finally:
-        _CLAIMED.discard(folder)
-        if _same_file(fd, lock):  # unlinked before the lock is released: see _lock
-            lock.unlink()
-        os.close(fd)
-        _remove_empty(made)
-
-
-def _lock(path):
-    """Open, lock and fill the lock file ``path``; its descriptor, or None if another
-    process holds it. A file its holder unlinked between our open and our lock is no
-    lock any more: the path is opened again."""
-    while True:
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
-        held = False
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            held = _same_file(fd, path)
-            if held:
-                os.ftruncate(fd, 0)
-                os.write(fd, f"{os.getpid()}\n".encode())
-                return fd
-        except BlockingIOError:
-            os.close(fd)
-            return None
-        except BaseException:
-            if held:
-                path.unlink(missing_ok=True)
-            os.close(fd)
-            raise
-        os.close(fd)
-
-
-def _same_file(fd, path):
-    """Whether ``path`` still names the file open as ``fd``."""
-    try:
-        return os.path.samestat(os.fstat(fd), os.stat(path))
-    except FileNotFoundError:
-        return False
-
-
-def _holder(lock):
-    """Where the lock is, and its holder's process id once written."""
-    try:
-        pid = lock.read_text().strip()
-    except OSError:
-        pid = ""
-    return f"process {pid}, lock {lock}" if pid.isdigit() else f"lock {lock}"
-
-
-def _remove_empty(folders):
+def remove_empty(folders):
     """Remove each of ``folders`` (deepest first) that is empty."""
     for folder in folders:
         try:
             folder.rmdir()
         except OSError:
             pass
-
-
-def check_report_folder(path, what="folder"):
-    """Resolve a report folder, refusing one that ``soilwater report`` must not write in.
-
-    ``~`` is expanded and symbolic links, ``.`` and ``..`` are resolved first. Accepted:
-    a folder that does not exist yet, an empty folder, and a report of soilwater's: a
-    folder holding :data:`REPORT_MARKER`, or, written before that marker, a ``REPORT.md``
-    whose first line is :data:`REPORT_HEADING` beside a ``studies`` folder.
-
-    Parameters
-    ----------
-    path : str or Path
-    what : str
-        How the caller's argument is named in a refusal (``"--out"`` from the command).
-
-    Returns
-    -------
-    Path
-        The resolved folder.
-
-    Raises
-    ------
-    InputError
-        If the folder is the current folder (the project's own files) or holds it, is the
-        home folder or holds it, is a file, is a result of ``soilwater run``, holds a
-        ``REPORT.md`` soilwater did not write, or holds other files and is no report.
-
-    Examples
-    --------
-    >>> check_report_folder(".", "--out")  # doctest: +ELLIPSIS
-    Traceback (most recent call last):
-    ...
-    soilwater.errors.InputError: --out . (= ...): the current folder or a folder holding it ...
-    """
-    fix = "name a new or empty folder, or a report soilwater wrote"
-    folder, shown = _target_folder(path, what, "report folder", fix)
-    if not folder.is_dir() or (folder / REPORT_MARKER).is_file():
-        return folder
-    if (folder / MARKER).is_file():
-        raise InputError(f"{what} {shown} is a result of soilwater run (it holds "
-                         f"{MARKER}), not a report folder; {fix}")
-    report = folder / "REPORT.md"
-    if report.is_file():
-        with open(report, errors="replace") as fh:
-            heading = fh.readline()
-        if heading.startswith(REPORT_HEADING) and (folder / "studies").is_dir():
-            return folder
-        raise InputError(f"{what} {shown}: {report} was not written by soilwater report; "
-                         f"move it out of the folder, or {fix}")
-    entries = list(folder.iterdir())
-    if entries:
-        raise InputError(f"{what} {shown} is not a soilwater report (no {REPORT_MARKER}) "
-                         f"and holds {_entries(len(entries))} ({_listing(entries)}); {fix}")
-    return folder
-
-
-def mark_report_folder(folder):
-    """Make ``folder`` (and its parents) if needed and mark it as a report of
-    soilwater's with :data:`REPORT_MARKER`, before the report writes anything there, so
-    that a report stopped half-way is still recognised by :func:`check_report_folder`.
-
-    Returns
-    -------
-    Path
-        ``folder``.
-    """
-    folder = Path(folder)
-    marker = folder / REPORT_MARKER
-    with naming(marker):
-        folder.mkdir(parents=True, exist_ok=True)
-        if not marker.is_file():
-            marker.write_text(json.dumps({
-                "written_by": "soilwater", "version": version("soilwater"),
-                "note": "soilwater report writes REPORT.md, tables/, figures/ and studies/ "
-                        "here"}) + "\n")
-    return folder
 
 
 def written_by_soilwater(path, columns=None):

@@ -3,7 +3,8 @@
 Each edge of the rectangle, or boundary group of a mesh (a physical curve,
 :mod:`soilwater.geometry.mesh`), is an :class:`Edge` (kinds of ux and uy, a total traction
 [kPa], tension positive, and a water condition); a :class:`Segment` overrides the kinds on
-a part of a rectangle's edge, e.g. a rigid strip footing. :class:`Boundary` holds the
+a part of a rectangle's edge, e.g. a rigid strip footing, or names a mesh's whole boundary
+group that is a footing, displaced or loaded (its history columns). :class:`Boundary` holds the
 edges by name: the rectangle's four in :data:`EDGES` order, or the mesh's groups.
 Coordinates are those of the initial configuration [m].
 """
@@ -33,7 +34,10 @@ class Segment:
     ``start`` and ``end`` (TOML ``from`` and ``to``) [m] are the coordinate along the edge
     in the initial configuration: x on the top and bottom edges, y on the left and right.
     A boundary point (EFG) or DOF (FEM) whose initial coordinate lies in ``[start, end]``
-    takes the segment's kinds; the segment carries no traction.
+    takes the segment's kinds; the segment carries no traction. A mesh's boundary group
+    that is a footing, displaced (``prescribed``) or loaded is one :attr:`whole` segment,
+    ``[-inf, inf]`` and named for the group, carrying the group's kinds and ``traction``
+    (None on every other segment).
 
     ``uy = "footing"`` makes the segment a rigid strip footing whose uy moves as one body:
     either velocity control, ``settlement_rate`` [m/s, positive down] (uy = -rate x t on
@@ -52,6 +56,12 @@ class Segment:
     water: str | None = None
     settlement_rate: float | None = None
     force: float | None = None
+    traction: tuple | None = None
+
+    @property
+    def whole(self):
+        """True for a mesh's whole boundary group (``[-inf, inf]``)."""
+        return self.start == -np.inf and self.end == np.inf
 
     @property
     def footing(self):
@@ -75,10 +85,12 @@ class Segment:
         return (s >= self.start - tol) & (s <= self.end + tol)
 
     def to_dict(self):
-        """The segment's TOML table (``from``, ``to``, its kinds and footing data)."""
-        data = {"from": self.start, "to": self.end, "ux": self.ux, "uy": self.uy,
-                "water": self.water, "settlement_rate": self.settlement_rate,
-                "force": self.force}
+        """The segment's TOML table (``from`` and ``to`` unless :attr:`whole`, its kinds
+        and footing data)."""
+        data = {"ux": self.ux, "uy": self.uy, "water": self.water,
+                "settlement_rate": self.settlement_rate, "force": self.force}
+        if not self.whole:
+            data = {"from": self.start, "to": self.end, **data}
         return {k: v for k, v in data.items() if v is not None}
 
 
@@ -106,19 +118,8 @@ class Edge:
 
     def traction_at(self, points):
         """The traction (P, 2) [kPa] at initial positions ``points`` (P, 2) [m] (not
-        for ``"exact"``).
-
-        Examples
-        --------
-        >>> Edge(traction=((0.0, 0.0, -10.0), (2.0, 0.0, 0.0))).traction_at(
-        ...     [[1.0, 5.0], [3.0, 5.0]]).tolist()
-        [[0.0, -5.0], [0.0, 0.0]]
-        """
-        x = np.atleast_2d(np.asarray(points, float))[:, 0]
-        if not self.profiled:
-            return np.broadcast_to(np.asarray(self.traction, float), (len(x), 2)).copy()
-        table = np.asarray(self.traction, float)
-        return np.column_stack([np.interp(x, table[:, 0], table[:, k]) for k in (1, 2)])
+        for ``"exact"``; :func:`traction_at`)."""
+        return traction_at(self.traction, points)
 
     @property
     def largest_traction(self):
@@ -164,6 +165,12 @@ class Edge:
             segment[inside] = k
         return kind.astype(str), drained, segment
 
+    def loaded(self, segment):
+        """(P,) bool: points that carry the edge's traction, from their ``segment`` index
+        (:meth:`at`): off every segment, or on a whole group's segment that carries it."""
+        carries = [seg.traction is not None for seg in self.segments]
+        return np.array(carries + [True])[np.asarray(segment)]
+
     def kinds(self, length):
         """The kinds that occur on the edge of ``length`` [m]: ``(ux kinds, uy kinds)``,
         two sets (the edge's own ones unless its segments cover it whole; a footing's uy
@@ -178,9 +185,28 @@ class Edge:
         return ux, uy
 
     def to_dict(self):
-        """The edge's TOML table, segments as sub-tables by name."""
-        return {"ux": self.ux, "uy": self.uy, "traction": self.traction,
-                "water": self.water, **{seg.name: seg.to_dict() for seg in self.segments}}
+        """The edge's TOML table, segments as sub-tables by name; a mesh group's
+        :attr:`~Segment.whole` segment as the group's own keys."""
+        data = {"ux": self.ux, "uy": self.uy, "traction": self.traction, "water": self.water}
+        if self.segments and self.segments[0].whole:
+            return {**data, **self.segments[0].to_dict(), "water": self.water}
+        return {**data, **{seg.name: seg.to_dict() for seg in self.segments}}
+
+
+def traction_at(traction, points):
+    """The traction (P, 2) [kPa] at initial positions ``points`` (P, 2) [m]: ``(tx, ty)``
+    everywhere, or a profile ``((x, tx, ty), ...)`` interpolated in x.
+
+    Examples
+    --------
+    >>> traction_at(((0.0, 0.0, -10.0), (2.0, 0.0, 0.0)), [[1.0, 5.0], [3.0, 5.0]]).tolist()
+    [[0.0, -5.0], [0.0, 0.0]]
+    """
+    x = np.atleast_2d(np.asarray(points, float))[:, 0]
+    if not (len(traction) > 0 and isinstance(traction[0], tuple)):
+        return np.broadcast_to(np.asarray(traction, float), (len(x), 2)).copy()
+    table = np.asarray(traction, float)
+    return np.column_stack([np.interp(x, table[:, 0], table[:, k]) for k in (1, 2)])
 
 
 def along(side, points):

@@ -61,8 +61,8 @@ def _require_supports(boundary, length):
     ``fixed``, ``prescribed`` and ``exact`` restrain a component, and so does a
     velocity-controlled footing (:class:`~soilwater.case.boundary.Segment`) its uy; a
     ``rigid`` plate (or a load-controlled footing) lets its edge settle. It would stop
-    rotation, but never decides: the uy that stops y translation is on a horizontal edge (stopping rotation
-    too) or on a vertical one, which may not meet the plate's edge with another kind.
+    rotation, but never decides: the uy that stops y translation is on a horizontal edge
+    (stopping rotation too) or on a vertical one, which may not meet the plate's edge with another kind.
     """
     kinds = {side: edge.kinds(length[side]) for side, edge in boundary.items()}
     ux = {side for side, (kx, _) in kinds.items() if kx & set(_RESTRAINED)}
@@ -82,8 +82,9 @@ def _require_supports(boundary, length):
 
 def _mesh_boundary(table, loading, mesh):
     """The boundary groups of a mesh: ``[boundary.NAME]`` for any of its physical curves
-    on the boundary, the others free, impermeable and unloaded; no segments, no rigid
-    plate; supported along x, y and against rotation. A physical curve inside the domain
+    on the boundary, the others free, impermeable and unloaded; no named segments (a
+    group is its own, :func:`_group`), no rigid plate but rigid footings, at most one of
+    them load-controlled; supported along x, y and against rotation. A physical curve inside the domain
     (:attr:`~soilwater.geometry.mesh.Mesh.interior`) takes no ``[boundary.NAME]``."""
     inner = [name for name in table if name in mesh.interior]
     if inner:
@@ -109,11 +110,16 @@ def _mesh_boundary(table, loading, mesh):
             normal = "ux" if d[0] == 0 else "uy" if d[1] == 0 else None
             spec.update(expand_displacement(spec.pop("displacement"), name, normal))
         require("rigid" not in (spec.get("ux"), spec.get("uy")), f"{where}: 'rigid' "
-                "applies to a rectangle's top or bottom edge: use fixed or prescribed")
-        edges.append((name, _edge(spec, name, loading, mesh.group_length(name))))
+                "applies to a rectangle's top or bottom edge: use \"footing\" (a rigid "
+                "footing on the group), fixed or prescribed")
+        edges.append((name, _group(spec, name, loading, mesh.group_length(name))))
     boundary = Boundary(tuple(edges))
-    restrained = [[name for name, edge in edges if getattr(edge, c) in _RESTRAINED]
-                  for c in ("ux", "uy")]
+    plates = [f"boundary.{name}" for name, seg in boundary.segments() if seg.load_controlled]
+    require(len(plates) <= 1, f"{' and '.join(plates)}: at most one load-controlled "
+            "footing (force) per case: give the others a settlement_rate")
+    restrained = [[name for name, edge in edges
+                   if edge.kinds(np.inf)[f] & {*_RESTRAINED, "footing"}]
+                  for f in range(2)]
     for comp, names, axis in zip(("ux", "uy"), restrained, ("x", "y")):
         require(names, f"boundary: the body is not supported along {axis} (no boundary "
                 f"group restrains {comp}): set a group's {comp} to \"fixed\", e.g. "
@@ -125,6 +131,32 @@ def _mesh_boundary(table, loading, mesh):
             "line): restrain ux on a group that spans a height, or uy on one that spans a "
             "width")
     return boundary
+
+
+def _group(spec, name, loading, length):
+    """A mesh's boundary group ``[boundary.NAME]``: an :class:`~soilwater.case.boundary.
+    Edge`, which a footing (``uy = "footing"``), a ``prescribed`` component or a traction
+    makes one :attr:`~soilwater.case.boundary.Segment.whole` segment named for the group
+    (its ``settlement@NAME`` and ``pressure@NAME`` columns)."""
+    footing = {key: spec.pop(key) for key in ("settlement_rate", "force") if key in spec}
+    if spec.get("uy") == "footing" or footing:
+        where = f"boundary.{name}"
+        if spec.get("uy") != "footing":
+            raise InputError(f"{where}.{next(iter(footing))} applies to a footing only: set "
+                             "uy = \"footing\" or remove it")
+        seg = _segment({"ux": spec.get("ux", "free"), "uy": spec.pop("uy"), **footing},
+                       name, name, loading, length, whole=True)
+        edge = _edge(spec, name, loading, length)
+        require(edge.traction != "exact" and edge.largest_traction == 0, f"{where}.traction:"
+                " a footing carries no traction (its force or settlement_rate loads it): "
+                "remove traction")
+        return replace(edge, segments=(seg,))
+    edge = _edge(spec, name, loading, length)
+    if edge.traction != "exact" and ("prescribed" in (edge.ux, edge.uy)
+                                     or edge.largest_traction > 0):
+        return replace(edge, segments=(Segment(name, -np.inf, np.inf, edge.ux, edge.uy,
+                                               traction=edge.traction),))
+    return edge
 
 
 def _edge(table, side, loading, length):
@@ -163,19 +195,22 @@ def _edge(table, side, loading, length):
     return replace(edge, segments=parsed)
 
 
-def _segment(table, name, side, loading, length):
-    """A named segment ``[boundary.<side>.<name>]``
-    (:class:`~soilwater.case.boundary.Segment`)."""
-    where = f"boundary.{side}.{name}"
-    require(re.fullmatch(r"[A-Za-z0-9_-]+", name) and name not in KEYS["edge"],
-            f"{where}: use letters, digits, _ and - in segment names (they become column "
-            f"names), other than the edge's keys {', '.join(KEYS['edge'])}")
-    check_keys(table, KEYS["segment"], where)
-    start, end = number(table, "from", where), number(table, "to", where)
-    along = "x" if side in ("top", "bottom") else "y"
-    require(0 <= start < end <= length, f"{where}: from = {start:g} and to = {end:g} must "
-            f"satisfy 0 <= from < to <= {length:g} (m along {along}, the edge's length): "
-            "put the segment on the edge")
+def _segment(table, name, side, loading, length, whole=False):
+    """A named segment ``[boundary.<side>.<name>]``, or with ``whole`` a mesh's whole
+    boundary group ``name`` that is a footing (:class:`~soilwater.case.boundary.Segment`)."""
+    where = f"boundary.{side}" if whole else f"boundary.{side}.{name}"
+    if whole:
+        start, end = -np.inf, np.inf
+    else:
+        require(re.fullmatch(r"[A-Za-z0-9_-]+", name) and name not in KEYS["edge"],
+                f"{where}: use letters, digits, _ and - in segment names (they become "
+                f"column names), other than the edge's keys {', '.join(KEYS['edge'])}")
+        check_keys(table, KEYS["segment"], where)
+        start, end = number(table, "from", where), number(table, "to", where)
+        along = "x" if side in ("top", "bottom") else "y"
+        require(0 <= start < end <= length, f"{where}: from = {start:g} and to = {end:g} "
+                f"must satisfy 0 <= from < to <= {length:g} (m along {along}, the edge's "
+                "length): put the segment on the edge")
     seg = Segment(name=name, start=start, end=end,
                   ux=string(table, "ux", where, "free", SEGMENT_KINDS["ux"]),
                   uy=string(table, "uy", where, "free", SEGMENT_KINDS["uy"]),
@@ -186,8 +221,8 @@ def _segment(table, name, side, loading, length):
                   force=number(table, "force", where) if "force" in table else None)
     given = [key for key in ("settlement_rate", "force") if key in table]
     if seg.footing:
-        require(side in ("top", "bottom"), f"{where}.uy = 'footing' applies to the top "
-                "or bottom edge only: move the segment there")
+        require(whole or side in ("top", "bottom"), f"{where}.uy = 'footing' applies to "
+                "the top or bottom edge only: move the segment there")
         require(len(given) == 1, f"{where}.uy = 'footing' needs exactly one of "
                 f"settlement_rate (m/s, velocity control) or force (kN/m, load control), "
                 f"not {' and '.join(given) or 'neither'}: keep one")
@@ -202,8 +237,8 @@ def _segment(table, name, side, loading, length):
 
 
 def require_coupled_footings(case):
-    footings = [f"boundary.{side}.{seg.name}" for side, seg in case.boundary.segments()
-                if seg.footing]
+    footings = [f"boundary.{side}" + ("" if seg.whole else f".{seg.name}")
+                for side, seg in case.boundary.segments() if seg.footing]
     require(not footings or case.analysis == "coupled", f"{footings[0] if footings else ''}"
             ": a footing needs analysis = \"coupled\" (the static solver has none)")
 
@@ -214,6 +249,8 @@ def require_segments_on_nodes(case):
     x, y = case.grid_lines()
     tol = SEGMENT_TOLERANCE * min(case.spacing)
     for side, seg in case.boundary.segments():
+        if seg.whole:
+            continue
         line, axis = (x, "x") if side in ("top", "bottom") else (y, "y")
         for key, end in (("from", seg.start), ("to", seg.end)):
             k = np.searchsorted(line, end - tol)

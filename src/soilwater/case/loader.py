@@ -25,7 +25,7 @@ named by the file's stem.
 
 import codecs
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from importlib.resources import files
 from os import PathLike
 from pathlib import Path
@@ -114,9 +114,10 @@ def load_case(name_or_path, *entries, overrides=()):
                         f"file's path or a Case, not {type(name_or_path).__name__}")
     data = name_or_path.to_dict() if isinstance(name_or_path, Case) else _raw(name_or_path)
     for entry in (*entries, overrides):
+        if not isinstance(entry, (str, Iterable)) or isinstance(entry, Mapping):
+            raise TypeError(f"load_case: overrides are strings 'section.key=value' or lists "
+                            f"of them, e.g. [\"time.end=1\"], not {type(entry).__name__}")
         for text in ([entry] if isinstance(entry, str) else entry):
-            require(isinstance(text, str), f"override {text!r} must be a string "
-                    "section.key=value, e.g. \"material.permeability=1e-6\"")
             apply_override(data, text)
     return case_from_dict(data)
 
@@ -139,6 +140,8 @@ def _raw(name_or_path):
     path = Path(name_or_path)
     require(path.suffix == ".toml" or path.exists(), f"case {text!r} is neither a built-in "
             f"case ({', '.join(builtins)}) nor a TOML file")
+    require(text.strip(), "the case is empty: give a built-in case name "
+            f"({', '.join(builtins)}) or a TOML file")
     require(path.exists(), f"case file {text!r} does not exist")
     require(path.is_file(), f"case file {text!r} is "
             f"{'a folder' if path.is_dir() else 'not a regular file'}: give a TOML file")
@@ -178,11 +181,15 @@ def _read_toml(source, stem, label=None):
     and a relative ``geometry.mesh`` is read from the file's folder."""
     label = label or source.name
     with source.open("rb") as fh:
-        raw = fh.read()
+        content = text(fh.read(), f"case file {label!r}")
     try:
-        data = tomllib.loads(text(raw, f"case file {label!r}"))
+        data = tomllib.loads(content)
     except tomllib.TOMLDecodeError as err:
         raise InputError(f"case file {label!r} is not valid TOML: {err}") from None
+    except ValueError as err:                         # an integer past Python's digits
+        raise InputError(f"case file {label!r} holds a number that cannot be read "
+                         f"({err.args[0].split(':')[0]}): write it with an exponent, "
+                         "e.g. 1e30") from None
     data.setdefault("name", stem)
     geometry = data.get("geometry")
     if isinstance(geometry, dict) and isinstance(geometry.get("mesh"), str):

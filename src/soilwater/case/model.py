@@ -37,7 +37,9 @@ from soilwater.references.closed_forms import exact_solution
 #: Analyses: the coupled u-p march, or static elasticity (EFG only).
 ANALYSES = ("coupled", "static")
 #: Initial stress states (:class:`Initial`).
-STRESS_STARTS = ("uniform", "geostatic")
+STRESS_STARTS = ("uniform", "geostatic", "gravity")
+#: Default number of equal increments of the gravity start's self-weight.
+GRAVITY_INCREMENTS = 10
 
 
 @dataclass(frozen=True)
@@ -60,12 +62,14 @@ class Initial:
     """The initial state (:mod:`soilwater.physics.geostatic`).
 
     ``pore_pressure``: a number [kPa] or ``"balance"`` (total stress zero). ``stress``:
-    ``"uniform"`` (the material's p'0, e0, ocr everywhere) or ``"geostatic"``: the
+    ``"uniform"`` (the material's p'0, e0, ocr everywhere), ``"geostatic"``: the
     vertical effective stress of the buoyant weight under the ``surcharge`` [kPa] on top,
     horizontal ``k0`` times it (a number, or ``"nc"``: the material's normally
     consolidated value), the void ratio on the material's compression line (anchored by
     ``material.e_ref`` and ``sigma_v_ref``, or through its e0 at p'0), and a vertical
-    overconsolidation ratio ``ocr``.
+    overconsolidation ratio ``ocr``; or ``"gravity"``: the uniform state loaded by its
+    self-weight, drained, in ``increments`` equal steps before t = 0
+    (:mod:`soilwater.nonlinear.gravity_start`).
     """
 
     pore_pressure: float | str = 0.0
@@ -73,12 +77,15 @@ class Initial:
     surcharge: float = 0.0
     k0: float | str = "nc"
     ocr: float = 1.0
+    increments: int = GRAVITY_INCREMENTS
 
     def to_dict(self):
-        """The ``[initial]`` table: the geostatic keys only with a geostatic start."""
+        """The ``[initial]`` table: the keys of its start only."""
         if self.stress == "uniform":
             return {"pore_pressure": self.pore_pressure}
-        return {k: v for k, v in asdict(self).items() if v is not None}
+        if self.stress == "gravity":
+            return {"stress": self.stress, "increments": self.increments}
+        return {k: v for k, v in asdict(self).items() if k != "increments"}
 
 
 @dataclass(frozen=True)
@@ -262,13 +269,14 @@ class Case:
         """:meth:`~soilwater.case.boundary.Edge.at` of edge ``side`` at initial positions
         ``points`` (P, 2) [m] on it, segment ends widened by
         :data:`~soilwater.case.boundary.SEGMENT_TOLERANCE` times the smallest spacing (a
-        mesh's boundary groups have no segments)."""
+        mesh's boundary group has at most its whole segment, which every point is on)."""
         return getattr(self.boundary, side).at(along(side, points),
                                                SEGMENT_TOLERANCE * min(self.spacing))
 
     def segment_nodes(self):
         """Indices into :meth:`nodes` of each named segment's nodes (the boundary nodes of
-        its edge within ``[from, to]``), in
+        its edge within ``[from, to]``; a mesh group's vertices for a
+        :attr:`~soilwater.case.boundary.Segment.whole` one), in
         :meth:`~soilwater.case.boundary.Boundary.segments` order."""
         nodes = self.nodes()
         loop = self.boundary_loop()
@@ -277,6 +285,9 @@ class Case:
                 "top": (1, g.height)}
         out = []
         for side, seg in self.boundary.segments():
+            if seg.whole:
+                out.append(g.mesh.group_nodes(side))
+                continue
             axis, value = line[side]
             p = nodes[loop]
             on = (np.abs(p[:, axis] - value) <= tol) & seg.contains(along(side, p), tol)

@@ -97,20 +97,31 @@ Schema (every case has the same one; unknown keys are an error)::
 
     [initial]                         # optional
     pore_pressure = "balance"         # a number (default 0) or "balance": p_w0 = -p'0/alpha,
-                                      # total stress zero; sigma'0 = -p'0 I (material p0)
+                                      # total stress zero; sigma'0 = -p'0 I (material p0);
+                                      # a number with a geostatic start, 0 with a
+                                      # gravity start
     stress = "uniform"                # or "geostatic": sigma'v from the buoyant weight
                                       # under the surcharge, sigma'h = k0 sigma'v, e from
-                                      # the compression line (soilwater.physics.geostatic)
+                                      # the compression line (soilwater.physics.geostatic;
+                                      # a level top only); or "gravity" (needs [gravity],
+                                      # any top, e.g. a slope): the uniform state takes
+                                      # its self-weight drained before t = 0, the run
+                                      # starts on the configuration it settled to with
+                                      # u = 0 and p_w = 0 (soilwater.nonlinear.gravity_start)
     surcharge = 10.0                  # geostatic: kPa >= 0 on the top, in equilibrium at
                                       # t = 0 (> 0 for Cam-clay: p' > 0 at the top)
     k0 = "nc"                         # geostatic: in (0, 1], or "nc" (the material's
                                       # normally consolidated value)
     ocr = 1.0                         # geostatic: vertical overconsolidation ratio >= 1
+    increments = 10                   # gravity: equal steps of the self-weight, in
+                                      # [1, 1000] (default 10; a step that fails is halved)
 
     [boundary.left]                   # each of left, right, bottom, top exactly once;
                                       # on a mesh, any of its boundary groups (the others
                                       # free, impermeable, unloaded), no segments, no
-                                      # rigid, roller on vertical or horizontal groups
+                                      # rigid, roller on vertical or horizontal groups;
+                                      # a group may be a footing (uy = "footing" with
+                                      # settlement_rate or force, as a segment below)
     ux = "fixed"                      # "free" (default), "fixed", "prescribed", "rigid"
     uy = "free"
     # displacement = "roller"         # shorthand instead of ux/uy: "roller" (normal
@@ -218,10 +229,11 @@ Boundary kinds of a displacement component:
   uniform vertical displacement (a frictionless rigid plate, Mandel's problem) whose total
   force is ``traction[1] x load factor x (initial edge length)`` per unit thickness.
 
-* ``footing`` (``uy`` of a named segment of the top or bottom edge): a rigid strip
-  footing, the segment's uy moving as one body; ``settlement_rate`` imposes uy =
-  -rate x t on it, ``force`` lets it settle by one unknown whose total force is
-  ``-force x load factor`` (the ``rigid`` plate's machinery). With ``ux = "fixed"`` it
+* ``footing`` (``uy`` of a named segment of the top or bottom edge, or of a mesh's
+  boundary group): a rigid strip footing, the segment's (group's) uy moving as one
+  body; ``settlement_rate`` imposes uy = -rate x t on it, ``force`` lets it settle by
+  one unknown whose total force is ``-force x load factor`` (the ``rigid`` plate's
+  machinery). With ``ux = "fixed"`` it
   is rough (no sideways motion), with ``ux = "free"`` smooth. Coupled analyses only.
 
 A named segment overrides its edge's kinds (and, if given, its water condition) where
@@ -233,6 +245,12 @@ mean downward displacement of a segment that is no footing) and ``pressure@NAME`
 (kPa, compression positive: the vertical force the boundary exerts on the soil there, in
 excess of the initial state, over the current width; see
 :func:`soilwater.nonlinear.history.segment_columns`).
+
+On a mesh, a boundary group that is a footing, has a ``prescribed`` component or
+carries a traction adds the same two columns under its own name: ``settlement@NAME`` the
+footing's settlement or the mean downward displacement of its vertices, ``pressure@NAME``
+the reaction over the current distance between its end vertices plus the applied ``-ty``
+(times the load factor, mean over its vertices).
 
 At a corner both edges' conditions apply (a segment that reaches the corner counts
 there); two different non-free kinds on the same
@@ -293,7 +311,7 @@ KEYS = {
     "geometry": ("shape", "width", "height", "mesh"),
     "discretisation": ("nx", "ny", "x", "y", "layout", "jitter", "seed"),
     "diagnostics": ("uniqueness",),
-    "initial": ("pore_pressure", "stress", "surcharge", "k0", "ocr"),
+    "initial": ("pore_pressure", "stress", "surcharge", "k0", "ocr", "increments"),
     "gravity": ("g",),
     "edge": ("ux", "uy", "displacement", "traction", "water"),
     "segment": ("from", "to", "ux", "uy", "water", "settlement_rate", "force"),
@@ -321,6 +339,8 @@ SCALES = (1.0, 1e3)
 """Accepted range of the MLS support scale factors ``efg.scale_u`` and ``scale_p``."""
 MAX_TRIANGLE_ORDER = 19
 """Highest degree of scikit-fem's triangle rules (``efg.order`` with Delaunay cells)."""
+MAX_INCREMENTS = 1000
+"""Most increments of a gravity start's self-weight (``initial.increments``)."""
 _NORMAL = {"left": "ux", "right": "ux", "bottom": "uy", "top": "uy"}
 
 
@@ -362,6 +382,8 @@ def apply_override(data, text):
 
     Raises
     ------
+    TypeError
+        ``text`` is not a string.
     InputError
         A malformed override, or one that descends into a value.
 
@@ -376,6 +398,9 @@ def apply_override(data, text):
     >>> data
     {'boundary': {'a.b': {'water': 'drained'}}}
     """
+    if not isinstance(text, str):
+        raise TypeError(f"an override must be a string 'section.key=value', e.g. "
+                        f"\"material.permeability=1e-6\", not {type(text).__name__}")
     key, sep, value = text.partition("=")
     path = _key_path(key) if sep else []
     require(sep and path and all(path), f"override {text!r}: write section.key=value, "
@@ -383,8 +408,10 @@ def apply_override(data, text):
             "boundary.\"a.b\".water=drained)")
     try:
         value = tomllib.loads(f"v = {value}")["v"]
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, ValueError):    # ValueError: an integer too long
         value = value.strip()
+    require(value != {}, f"override {text!r} sets an empty table, which would drop every "
+            f"key of {key.strip()}: set its keys one at a time, e.g. {key.strip()}.KEY=VALUE")
     table = data
     for depth, part in enumerate(path[:-1]):
         table = table.setdefault(part, {})

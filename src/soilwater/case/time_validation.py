@@ -25,8 +25,12 @@ def read_loading(table):
         return Loading(L, number(table, "load", "loading", 1.0))
     points = tuple(_load_point(p) for p in load)
     times = [t for t, _ in points]
-    require(points and times[0] >= 0 and all(np.diff(times) > 0), "loading.load: give "
-            "[t, factor] points with increasing times t >= 0, or one number (step load)")
+    require(len(points) >= 2 and all(np.diff(times) > 0), "loading.load: give two or "
+            "more [t, factor] points with increasing times from t = 0, or one number (a "
+            "step load)")
+    require(times[0] == 0, f"loading.load starts at t = {times[0]:g} s: give the factor "
+            f"at t = 0 too, e.g. [[0, 0], [{times[0]:g}, {points[0][1]:g}]] for a ramp or "
+            f"[[0, {points[0][1]:g}], ...] for a step load")
     return Loading(L, points)
 
 
@@ -67,8 +71,10 @@ def _output(value, end):
     """``time.output``: increasing times in (0, end] [s], or None."""
     if value is None:
         return None
-    require(isinstance(value, (list, tuple)) and value, "time.output must be a list of "
-            "times, e.g. [\"0.1 yr\", \"1 yr\", \"10 yr\"]")
+    require(isinstance(value, (list, tuple)), f"time.output = {value!r} must be a list of "
+            f"times, e.g. [{value!r}] or [\"0.1 yr\", \"1 yr\", \"10 yr\"]")
+    require(value, "time.output = [] names no time: give one or more, e.g. [\"1 yr\"], or "
+            "remove it to write every level")
     times = [duration(v, "time.output entry") for v in value]
     require(all(0 < t <= end * (1 + 1e-9) for t in times) and all(np.diff(times) > 0),
             f"time.output = {value!r}: give increasing times after 0 and at most time.end "

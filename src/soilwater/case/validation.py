@@ -18,14 +18,15 @@ from soilwater.case.entries import check_keys, integer, number, pair, section, s
 from soilwater.case.domain import read_geometry
 from soilwater.case.regions import read_regions
 from soilwater.case.grid import LAYOUTS, MESH, Discretisation
-from soilwater.case.model import (ANALYSES, STRESS_STARTS, Case, Diagnostics, Gravity,
-                                  Initial, Probe)
-from soilwater.case.schema import (ASPECTS, GRADINGS, KEYS, MAX_TRIANGLE_ORDER, SCALES,
-                                   SECTIONS)
+from soilwater.case.model import (ANALYSES, GRAVITY_INCREMENTS, STRESS_STARTS, Case,
+                                  Diagnostics, Gravity, Initial, Probe)
+from soilwater.case.schema import (ASPECTS, GRADINGS, KEYS, MAX_INCREMENTS,
+                                   MAX_TRIANGLE_ORDER, SCALES, SECTIONS)
 from soilwater.case.time_validation import read_loading, read_time
 from soilwater.efg.settings import (CELLS, CORRECTIONS, DEFAULT_SCALE, ESSENTIAL,
                                     INTEGRATIONS, STABILISATIONS, EFGSettings, Weight)
 from soilwater.errors import InputError, require
+from soilwater.material.camclay import MAX_OCR
 from soilwater.fem.settings import REMESH, FEMSettings
 from soilwater.material.fluid import PERMEABILITY_LAWS, Fluid
 from soilwater.material.presets import FLUID_KEYS, material_from_spec, parameters
@@ -230,11 +231,23 @@ def _initial(table):
         value = number(table, "pore_pressure", "initial", 0.0)
     start = string(table, "stress", "initial", "uniform", STRESS_STARTS)
     geostatic = ("surcharge", "k0", "ocr")
-    if start == "uniform":
+    if start != "geostatic":
         given = [key for key in geostatic if key in table]
         require(not given, f"initial.{', '.join(given)} only apply to initial.stress = "
                 "\"geostatic\": set it, or remove them")
+    if start != "gravity":
+        require("increments" not in table, "initial.increments only applies to "
+                "initial.stress = \"gravity\": set it, or remove the key")
+    if start == "uniform":
         return Initial(value)
+    if start == "gravity":
+        require(value == 0, f"initial.pore_pressure = {value!r}: a gravity start has no "
+                "excess pore pressure (its self-weight is switched on drained): remove it")
+        increments = integer(table, "increments", "initial") if "increments" in table \
+            else GRAVITY_INCREMENTS
+        require(1 <= increments <= MAX_INCREMENTS, f"initial.increments = {increments} "
+                f"must lie in [1, {MAX_INCREMENTS}] (equal steps of the self-weight)")
+        return Initial(stress=start, increments=increments)
     require(value != "balance", "initial.pore_pressure = \"balance\" sets the total stress "
             "to zero, which a geostatic start does not have: give a number (default 0)")
     k0 = table.get("k0", "nc")
@@ -248,7 +261,8 @@ def _initial(table):
     require(surcharge >= 0, f"initial.surcharge = {surcharge} must be >= 0 (kPa, "
             "compression positive)")
     ocr = number(table, "ocr", "initial", 1.0)
-    require(ocr >= 1, f"initial.ocr = {ocr} must be at least 1")
+    require(1 <= ocr <= MAX_OCR, f"initial.ocr = {ocr} must lie in [1, {MAX_OCR:g}] (no "
+            "soil is more overconsolidated)")
     return Initial(value, start, surcharge, k0, ocr)
 
 
@@ -259,6 +273,11 @@ def _require_weight(case):
         require(case.fluid.biot_alpha == 1, f"material.biot_alpha = "
                 f"{case.fluid.biot_alpha} must be 1 with gravity: the skeleton carries its "
                 "buoyant weight, which holds for incompressible grains")
+    if case.initial.stress == "gravity":
+        require(case.analysis == "coupled", "initial.stress = \"gravity\" needs analysis "
+                "= \"coupled\"")
+        require(case.gravity.g > 0, "initial.stress = \"gravity\" switches on the "
+                "self-weight: add [gravity] with g = 9.81, or start \"uniform\"")
     if case.initial.stress == "geostatic":
         require(case.analysis == "coupled", "initial.stress = \"geostatic\" needs analysis "
                 "= \"coupled\"")
@@ -269,8 +288,8 @@ def _require_weight(case):
             require(low[1] >= case.geometry.height * (1 - 1e-9), "initial.stress = "
                     "\"geostatic\" takes the depth below a level ground surface, and the "
                     f"mesh's surface falls to y = {low[1]:g} m at x = {low[0]:g} m (its top "
-                    f"is at {case.geometry.height:g} m): start uniform, or load a level "
-                    "ground (an embankment as a surface load)")
+                    f"is at {case.geometry.height:g} m): use initial.stress = \"gravity\" "
+                    "(the self-weight switched on drained before t = 0)")
         plastic = case.material().plastic
         require(case.initial.surcharge > 0 or not plastic,
                 "initial.surcharge must be > 0 with a Cam-clay geostatic start: p' would be "

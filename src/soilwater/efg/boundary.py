@@ -90,7 +90,8 @@ class Conditions:
         footing) per component.
     traction : ndarray, shape (G, 2)
         The edge's traction at each point [stress unit] (zero where ``exact``, see
-        ``exact_traction``, and on named segments, which carry none).
+        ``exact_traction``, and on named segments, which carry none but a mesh group's whole
+        one).
     exact_traction : ndarray of bool, shape (G,)
         Whether the edge takes its traction from the case's exact solution.
     drained : ndarray of bool, shape (G,)
@@ -156,7 +157,8 @@ def conditions(case, bpoints, initial=None):
         segment[on] = np.where(seg >= 0, seg + first, -1)
         exact[on] = edge.traction == "exact"
         if edge.traction != "exact":
-            traction[on] = np.where(seg[:, None] >= 0, 0.0, edge.traction_at(initial[on]))
+            traction[on] = np.where(edge.loaded(seg)[:, None], edge.traction_at(initial[on]),
+                                    0.0)
         first += len(edge.segments)
     rates = np.array([seg.settlement_rate if seg.footing and not seg.load_controlled
                       else 0.0 for _, seg in case.boundary.segments()] + [0.0])

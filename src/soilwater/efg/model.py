@@ -40,7 +40,10 @@ class Points:
 
 @dataclass
 class Model:
-    """What stays fixed over a run: case, material, boundary topology, scales."""
+    """What stays fixed over a run: case, material, boundary topology, scales, and the
+    positions at t = 0 from which displacements are measured, of the nodes (``origin``,
+    (N, 2) [m]) and of the probes (``probes0``, (P, 2) [m]): the initial ones, or where a
+    gravity start left them (:mod:`soilwater.nonlinear.gravity_start`)."""
 
     case: object
     material: object
@@ -50,6 +53,8 @@ class Model:
     initial_bp: np.ndarray   # (G, 2) boundary points in the initial configuration [m]
     sigma0_bp: np.ndarray    # (G, 4) initial total stress there [kPa]
     triangles: np.ndarray | None = None  # (C, 3) initial triangles ("gauss", "nodal")
+    origin: np.ndarray | None = None     # (N, 2) node positions at t = 0 [m]
+    probes0: np.ndarray | None = None    # (P, 2) probe positions at t = 0 [m]
 
     @classmethod
     def build(cls, case):
@@ -64,7 +69,8 @@ class Model:
             nodes = case.nodes()
             triangles, _ = delaunay_triangles(nodes, nodes[loop])
         return cls(case, material, loop, edges, Scales.of(case, material), initial_bp,
-                   total_stress(case, material, initial_bp), triangles)
+                   total_stress(case, material, initial_bp), triangles, case.nodes(),
+                   np.array([p.point for p in case.probes]).reshape(-1, 2))
 
     @property
     def consistent(self):

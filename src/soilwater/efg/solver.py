@@ -21,9 +21,12 @@ is halved up to :data:`soilwater.nonlinear.march.MAX_CUTS` times before the run 
 with one clear error.
 
 The initial state (:func:`soilwater.physics.geostatic.initial_state`, uniform or geostatic)
-is set at the nodes, and its total stress ``sigma0 . n`` at each boundary point's initial
-position loads the boundary, with the edge tractions; under gravity the buoyant weight at
-the integration points (:mod:`soilwater.physics.geostatic`) loads the domain.
+is set at the material points, and its total stress ``sigma0 . n`` at each boundary
+point's initial position loads the boundary, with the edge tractions; under gravity the
+buoyant weight at the integration points (:mod:`soilwater.physics.geostatic`) loads the
+domain. A gravity start loads the uniform state with its weight, drained, by this
+solver's own steps (:mod:`soilwater.nonlinear.gravity_start`), and the run starts where
+that left the material points, the nodes and the boundary gaps.
 
 Where the material state lives is ``efg.integration``. With ``"gauss"`` it lives at the
 Gauss points of Delaunay triangles of the nodes, which move with the nodes: each step
@@ -58,6 +61,7 @@ configuration is :mod:`soilwater.efg.discretisation`'s, its Newton system
 :mod:`soilwater.efg.system`'s, the state kept between steps :mod:`soilwater.efg.model`'s.
 """
 
+from dataclasses import replace
 from functools import partial
 
 import numpy as np
@@ -78,6 +82,7 @@ from soilwater.geometry.quality import cell_quality
 from soilwater.geometry.triangulation import delaunay_triangles
 from soilwater.efg.system import System
 from soilwater.material.kinematics import invariants
+from soilwater.nonlinear.gravity_start import switch_on
 from soilwater.nonlinear.history import history_row, timed
 from soilwater.nonlinear.march import run
 from soilwater.nonlinear.newton import newton
@@ -105,17 +110,38 @@ def solve(case, progress=True):
         (:func:`soilwater.efg.settings.check`) and other invalid settings.
     """
     check(case.efg)
-    model = Model.build(case)
-    result = run(case, "efg", case.efg.to_dict(), _initial_points(model),
+    model, start, gravity = _start(Model.build(case), progress)
+    result = run(case, "efg", case.efg.to_dict(), start,
                  partial(_step, model), partial(_history_row, model),
                  partial(_snapshot, model),
                  {"dofs": 3 * len(case.nodes()), "stabilisation_beta": model.beta,
                   "stabilisation_tau": model.tau,
-                  **factors(model, case.times())}, progress)
+                  **factors(model, case.times()), **gravity}, progress)
     if model.gauss:
         records = result.summary.setdefault("rebuild_records", [])
         result.summary["rebuilds"] = len(records)
     return result
+
+
+def _start(model, progress):
+    """The model, its points at t = 0 and the summary's entries of the start: the case's
+    initial points, or after a gravity start
+    (:func:`soilwater.nonlinear.gravity_start.switch_on`) the phase's end with p_w = 0,
+    no plate settlement, no stretching and no rebuilds counted, its gaps (the supports'
+    reactions) kept, and the displacements measured from there (``origin``,
+    ``probes0``); ``gravity_start`` (the phase's summary and its largest displacement
+    [m]) in the summary."""
+    start = _initial_points(model)
+    case = model.case
+    if case.initial.stress != "gravity":
+        return model, start, {}
+    end, phase = switch_on(model, _initial_points, _step, progress,
+                           f"gravity efg {case.name}")
+    settled = replace(end, p=start.p, plate=0.0, stretching=np.zeros_like(end.stretching),
+                      cells=end.cells._replace(rebuilds=()))
+    moved = np.linalg.norm(end.nodes - model.origin, axis=1).max()
+    return (replace(model, origin=end.nodes.copy(), probes0=end.probes.copy()), settled,
+            {"gravity_start": {**phase, "largest_displacement": float(moved)}})
 
 
 def _initial_points(model):
@@ -206,8 +232,8 @@ def _history_row(model, points, t, dt, info):
     records are the summary's ``rebuild_records``); after a rebuild the cells measured
     are the new ones."""
     case = model.case
-    nodes0 = case.nodes()
-    level = nodes0[:, 1] >= case.geometry.height * (1 - 1e-9)   # the top: boundary facets
+    nodes0 = model.origin
+    level = case.nodes()[:, 1] >= case.geometry.height * (1 - 1e-9)   # the top: facets
     top = model.loop[level[model.loop] & level[np.roll(model.loop, -1)]]   # at its height
     probes = ()
     if len(points.probes):
@@ -215,7 +241,7 @@ def _history_row(model, points, t, dt, info):
         shape = ShapeFunctions.build(points.nodes, points.probes, s.weight_p, s.scale_p,
                                      key="efg.scale_p")
         probes = zip([pr.name for pr in case.probes], shape.phi @ points.p,
-                     points.probes - [pr.point for pr in case.probes])
+                     points.probes - model.probes0)
     uniqueness = points.uniqueness if case.diagnostics.uniqueness else None
     segments = [(seg, points.nodes[k], nodes0[k], force,
                  points.plate if seg.load_controlled else None)
@@ -241,7 +267,7 @@ def _snapshot(model, points, t):
         stress, stretching = (nodal_average(points.cells, n, f) for f in (stress, stretching))
         state = {k: nodal_average(points.cells, n, v) for k, v in state.items()}
     p, q = invariants(stress)
-    data = {"u": points.nodes - model.case.nodes(), "p_w": at.phi @ points.p,
+    data = {"u": points.nodes - model.origin, "p_w": at.phi @ points.p,
             "p_eff": p, "q": q, "stress": stress, "stretching": stretching,
             "support_radius": at.support}
     data.update(state)

@@ -37,7 +37,7 @@ class Constraints:
         residuals sum to the segment's vertical reaction.
     unloaded : dict
         Per edge name, (F,) bool over its facets: facets on a named segment, which
-        carry no edge traction.
+        carry no edge traction (:meth:`soilwater.case.boundary.Edge.loaded`).
     T : scipy.sparse.csr_matrix
         Full increment = ``T @ reduced``: free unknowns, then the plate (if any).
     is_u : ndarray of bool
@@ -84,7 +84,7 @@ class Constraints:
             drained.append(2 * n_u + pdofs[wet])
             facets = space.edge_facets[name]
             mid = space.mesh0.p[:, space.mesh0.facets[:, facets]].mean(axis=1).T
-            unloaded[name] = case.edge_conditions(name, mid)[2] >= 0
+            unloaded[name] = ~edge.loaded(case.edge_conditions(name, mid)[2])
             first += len(edge.segments)
         fixed, plate, drained = (np.unique(np.concatenate(s)) if s else np.zeros(0, int)
                                  for s in (sets["fixed"], sets["rigid"], drained))

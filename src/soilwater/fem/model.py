@@ -15,8 +15,11 @@ from soilwater.physics.scales import Scales
 
 @dataclass
 class Model:
-    """What stays fixed over a run: case, method, material, initial space, scales, and
-    the boundary loop (vertex indices, counter-clockwise) that re-meshing keeps."""
+    """What stays fixed over a run: case, method, material, initial space, scales, the
+    boundary loop (vertex indices, counter-clockwise) that re-meshing keeps, and the
+    ``origin`` (N, 2) [m]: the vertices' positions at t = 0, from which displacements are
+    measured (the initial mesh's, or where a gravity start left them,
+    :mod:`soilwater.nonlinear.gravity_start`)."""
 
     case: object
     method: str
@@ -24,6 +27,7 @@ class Model:
     space: Space
     scales: Scales
     loop: np.ndarray
+    origin: np.ndarray
 
     @classmethod
     def build(cls, case, method):
@@ -37,7 +41,7 @@ class Model:
                              f"--method {method} has quadrilaterals: use fem-th, fem-p1p1 "
                              "or fem-p1p1-stab, or fem.remesh = \"never\"")
         return cls(case, method, material, space, Scales.of(case, material),
-                   case.boundary_loop())
+                   case.boundary_loop(), space.mesh0.p.T.copy())
 
     @property
     def beta(self):

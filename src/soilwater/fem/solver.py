@@ -12,7 +12,10 @@ stress ``sigma0 . n`` on every boundary facet (sigma0 at the facet point's initi
 :func:`soilwater.physics.geostatic.total_stress`: uniform or geostatic) plus the edge
 traction x load factor on free components (a dead load on the start-of-step facets), and
 under gravity the buoyant weight of the elements (:mod:`soilwater.physics.geostatic`). The
-initial state is set at the quadrature points' initial positions.
+initial state is set at the quadrature points' initial positions; a gravity start then
+loads it with its weight, drained, by this solver's own steps
+(:mod:`soilwater.nonlinear.gravity_start`), and the run starts where that left the
+quadrature points and the mesh.
 
 Newton's method (:func:`soilwater.nonlinear.newton.newton`) starts from the last step's
 velocity x dt (``L x`` at the first step). Convergence, cut-back and scales are those of
@@ -76,15 +79,18 @@ system :mod:`soilwater.fem.system`'s, the re-meshing :mod:`soilwater.fem.remesh`
 state kept between steps :mod:`soilwater.fem.model`'s.
 """
 
+from dataclasses import replace
 from functools import partial
 
 import numpy as np
 
+from soilwater.fem.constraints import Constraints
 from soilwater.fem.model import Model, State, Topology
 from soilwater.fem.remesh import remesh
 from soilwater.fem.spaces import cell_bases
 from soilwater.fem.system import System, discretise
 from soilwater.material.kinematics import invariants
+from soilwater.nonlinear.gravity_start import switch_on
 from soilwater.nonlinear.history import history_row
 from soilwater.nonlinear.march import run
 from soilwater.nonlinear.newton import newton
@@ -113,21 +119,46 @@ def solve(case, method="fem-th", progress=True):
         A static case, a quadrilateral method on a ``grid+centres`` case or with
         ``fem.remesh``.
     """
-    model = Model.build(case, method)
+    model, start, gravity = _start(Model.build(case, method), progress)
     space = model.space
     pair = space.pair
     options = {"elements": f"{pair.u_element.__name__}/{pair.p_element.__name__}",
                "intorder": pair.intorder, "stabilised": pair.stabilised}
-    result = run(case, method, options, _initial_state(model), partial(_step, model),
+    result = run(case, method, options, start, partial(_step, model),
                  partial(_history_row, model), partial(_snapshot, model),
                  {"dofs": int(2 * space.n_u + space.n_p),
                   "elements": int(space.mesh0.t.shape[1]),
-                  "stabilisation_beta": model.beta}, progress)
+                  "stabilisation_beta": model.beta, **gravity}, progress)
     if case.fem.remesh != "never":
         last = result.history.iloc[-1]
         result.summary.update(remeshes=int(last["remeshes"]),
                               remesh_refused=int(last["remesh_refused"]))
     return result
+
+
+def _start(model, progress):
+    """The model, its state at t = 0 and the summary's entries of the start: the case's
+    initial state, or after a gravity start
+    (:func:`soilwater.nonlinear.gravity_start.switch_on`) the phase's end with the
+    case's own constraints, p_w = 0, no stretching, the predictor ``L x`` and the
+    displacements measured from there (``origin``); ``gravity_start`` (the phase's
+    summary and its largest displacement [m]) in the summary."""
+    start = _initial_state(model)
+    case = model.case
+    if case.initial.stress != "gravity":
+        return model, start, {}
+    end, phase = switch_on(model, _initial_state, _step, progress,
+                           f"gravity {model.method} {case.name}")
+    space = end.topology.space
+    ub, _ = cell_bases(space.moved(end.vertices), space.pair)
+    settled = replace(end, p=start.p, stretching=np.zeros_like(end.stretching),
+                      velocity=(case.loading.L @ ub.doflocs).ravel(),
+                      topology=replace(end.topology,
+                                       constraints=Constraints.build(case, space)),
+                      remeshes=0, refused=0, remesh_residual=0.0)
+    moved = np.linalg.norm(end.vertices - model.origin, axis=1).max()
+    return (replace(model, origin=end.vertices.copy()), settled,
+            {"gravity_start": {**phase, "largest_displacement": float(moved)}})
 
 
 def _initial_state(model):
@@ -163,7 +194,7 @@ def _history_row(model, current, t, dt, info):
     case, topology = model.case, current.topology
     top = model.space.mesh0.p[1] > case.geometry.height * (1 - 1e-9)
     probes = ()
-    nodes0 = model.space.mesh0.p.T
+    nodes0 = model.origin
     if topology.probes is not None:     # vertex displacements, linear between vertices
         moved = topology.probes @ (current.vertices - nodes0)
         probes = zip([pr.name for pr in case.probes], topology.probes @ current.p, moved)
@@ -196,7 +227,7 @@ def _snapshot(model, current, t):
     quantities = {"p_eff": p, "q": q, "stress": current.stress,
                   "stretching": current.stretching, **current.state}
     velocity = current.velocity.reshape(2, -1).T
-    data = {"u": current.vertices - mesh0.p.T, "p_w": current.p[:N],
+    data = {"u": current.vertices - model.origin, "p_w": current.p[:N],
             "velocity": velocity[:N]}
     volume = current.weights.reshape(E, -1)
     share = np.repeat(volume.sum(1), cells.shape[0])

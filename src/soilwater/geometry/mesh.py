@@ -106,6 +106,11 @@ class Mesh:
         d = self.points[np.roll(self.loop, -1)] - self.points[self.loop]
         return float(np.hypot(d[:, 0], d[:, 1])[self.group == self.groups.index(name)].sum())
 
+    def group_nodes(self, name):
+        """Sorted indices into :attr:`points` of the vertices on boundary group ``name``."""
+        on = self.group == self.groups.index(name)
+        return np.unique(np.concatenate([self.loop[on], np.roll(self.loop, -1)[on]]))
+
     def facet_group(self, a, b):
         """Index into :attr:`groups` of the boundary facets from ``a`` to ``b`` (P, 2)
         [m] (initial positions, either direction), by the nearest facet midpoint."""

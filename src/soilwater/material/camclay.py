@@ -26,6 +26,9 @@ from soilwater.material.kinematics import (DEVIATORIC, IDENTITY, deviator, doubl
 from soilwater.material.protocol import Material
 
 MODELS = ("original", "modified")
+#: The largest isotropic overconsolidation ratio p'c0 / p'0 taken (``material.ocr``,
+#: ``initial.ocr``, ``soilwater path --ocr``).
+MAX_OCR = 1e4
 
 
 @dataclass(frozen=True)
@@ -93,7 +96,8 @@ class CamClay(Material):
                 f"material.p0 = {self.p0} must be positive: it is the initial mean effective "
                 "stress p'0, compression positive")
         require(self.M > 0, f"material.M = {self.M} must be positive (critical state ratio)")
-        require(self.ocr >= 1.0, f"material.ocr = {self.ocr} must be at least 1")
+        require(1.0 <= self.ocr <= MAX_OCR, f"material.ocr = {self.ocr} must lie in "
+                f"[1, {MAX_OCR:g}] (no soil is more overconsolidated)")
         require(self.G is None or self.G > 0, f"material.G = {self.G} must be positive")
         require((self.e_ref is None) == (self.sigma_v_ref is None), "material.e_ref and "
                 "material.sigma_v_ref anchor the compression line together: set both or "

@@ -14,7 +14,7 @@ import tomllib
 from dataclasses import replace
 from pathlib import Path
 
-from soilwater.material.camclay import CamClay
+from soilwater.material.camclay import MODELS, CamClay
 from soilwater.material.elastic import LinearElastic
 from soilwater.errors import InputError, require
 
@@ -56,6 +56,8 @@ def material_from_spec(spec):
     """
     spec = {k: v for k, v in spec.items() if k not in FLUID_KEYS}
     model = spec.pop("model", "original")
+    require(model in ("elastic", *MODELS), f"material.model = {model!r} is unknown: use "
+            f"one of {', '.join(('elastic', *MODELS))}")
     preset = spec.pop("preset", None)
     values = {}
     if preset is not None:

@@ -10,6 +10,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from soilwater.case.boundary import traction_at
 from soilwater.geometry.quality import cell_quality
 from soilwater.material.kinematics import invariants
 
@@ -85,9 +86,9 @@ def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, 
         quality = {"min_angle": float(angle.min()), "min_quality": float(shape.min())}
     if rcond is not None:
         quality["min_rcond"] = float(rcond)
-    contact = {}
+    contact, load = {}, case.loading.factor(t)
     for seg, nodes, nodes0, reaction, plate in segments:
-        contact.update(segment_columns(seg, t, nodes, nodes0, reaction, plate))
+        contact.update(segment_columns(seg, t, nodes, nodes0, reaction, plate, load))
     return {"time": t, "eps_a": axial_strain(case, top[:, 1]),
             "p": np.average(p, weights=weights), "q": np.average(q, weights=weights),
             "err": stretching_error(case, stretching[:, 1], weights),
@@ -101,16 +102,17 @@ def history_row(case, t, dt, info, stress, stretching, top, top0, weights=None, 
             **quality}
 
 
-def segment_columns(segment, t, nodes, nodes0, reaction, plate=None):
+def segment_columns(segment, t, nodes, nodes0, reaction, plate=None, load=1.0):
     """``settlement@NAME`` [m, positive down] and ``pressure@NAME`` [kPa, compression
     positive] of one named segment at time t [s].
 
     The settlement is the footing's: ``settlement_rate x t`` under velocity control,
     ``-plate`` under load control; for a segment that is no footing, the mean downward
-    displacement of its nodes. The pressure is the mean contact pressure, ``-reaction /
-    width``, the current width being ``(to - from)`` times the stretch of the segment's
-    nodes (the current over the initial distance between its two end nodes; 1 with
-    fewer than two nodes).
+    displacement of its nodes. The pressure is the mean vertical pressure on the soil,
+    ``-reaction / width``, the width being the current distance between the segment's two
+    end nodes (those furthest apart along its longer initial extent; ``to - from`` with
+    fewer than two nodes), plus, on a mesh group that carries a traction, the applied
+    ``-ty`` times the load factor ``load``, mean over its nodes.
 
     Examples
     --------
@@ -128,14 +130,15 @@ def segment_columns(segment, t, nodes, nodes0, reaction, plate=None):
         settlement = segment.settlement_rate * t
     else:
         settlement = -float(np.mean(nodes[:, 1] - nodes0[:, 1])) if len(nodes) else 0.0
-    stretch = 1.0
+    width = segment.end - segment.start
     if len(nodes0) > 1:
         order = np.argsort(nodes0[:, np.argmax(np.ptp(nodes0, axis=0))])
-        ends, ends0 = nodes[order[[0, -1]]], nodes0[order[[0, -1]]]
-        stretch = np.linalg.norm(ends[1] - ends[0]) / np.linalg.norm(ends0[1] - ends0[0])
-    width = (segment.end - segment.start) * stretch
+        width = np.linalg.norm(nodes[order[-1]] - nodes[order[0]])
+    pressure = -reaction / width
+    if segment.traction is not None:
+        pressure -= load * float(np.mean(traction_at(segment.traction, nodes0)[:, 1]))
     return {f"settlement@{segment.name}": float(settlement),
-            f"pressure@{segment.name}": float(-reaction / width)}
+            f"pressure@{segment.name}": float(pressure)}
 
 
 def _probe_columns(probes):

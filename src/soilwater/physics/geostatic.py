@@ -13,8 +13,10 @@ solids' mass is conserved (``v = 1 + e`` grows as ``J``), so gamma' times the cu
 volume is its start-of-step value times the start-of-step volume: on the configuration
 x_n of the updated-Lagrangian step it is a dead load, with no tangent.
 
-The initial state (``[initial]``) is either uniform (the material's p'0, e0 and ocr at
-every point) or geostatic: the vertical effective stress ``sigma'_v`` of the buoyant
+The initial state (``[initial]``) is uniform (the material's p'0, e0 and ocr at every
+point), the gravity start (:mod:`soilwater.nonlinear.gravity_start`: the uniform state
+loaded by its self-weight before t = 0, run by the solvers; here it is the uniform state
+it starts from) or geostatic: the vertical effective stress ``sigma'_v`` of the buoyant
 weight under the surcharge, integrated down from the top with the void ratio of each
 depth (``d sigma'_v / d depth = gamma'(e(sigma'_v))``), ``sigma'_h = sigma'_zz = k0
 sigma'_v``, and the state on the material's compression line: for Cam-clay p'c of the
@@ -47,7 +49,8 @@ def buoyant_weight(case, v):
 
 def initial_state(case, material, points):
     """Effective stress (P, 4) and material state at t = 0 (the pore pressure is
-    ``case.initial_pore_pressure`` everywhere).
+    ``case.initial_pore_pressure`` everywhere); for a gravity start, the uniform state its
+    self-weight is switched on from (:mod:`soilwater.nonlinear.gravity_start`).
 
     Parameters
     ----------
@@ -58,21 +61,24 @@ def initial_state(case, material, points):
         Positions in the initial configuration [m].
     """
     points = np.asarray(points, dtype=float).reshape(-1, 2)
+    uniform = case.initial.stress != "geostatic"
     if isinstance(material, Regions):
         region = case.geometry.region_of(points)
-        if case.initial.stress == "uniform":
+        if uniform:
             return material.initial_state(len(points), region=region)
         sigma_v = _vertical_stress(case)(case.geometry.height - points[:, 1])
         return material.gather([_geostatic(case, m, sigma_v[region == r]) for r, m in
                                 enumerate(material.materials)], region)
-    if case.initial.stress == "uniform":
+    if uniform:
         return material.initial_state(len(points))
     return _geostatic(case, material, _vertical_stress(case)(case.geometry.height
                                                              - points[:, 1]))
 
 
 def total_stress(case, material, points):
-    """Initial total stress ``sigma'_0 - alpha p_w0 I`` (P, 4) at initial positions [kPa]."""
+    """Initial total stress ``sigma'_0 - alpha p_w0 I`` (P, 4) at initial positions [kPa]
+    (:func:`initial_state`'s: the uniform one of a gravity start, whose boundary load it
+    stays)."""
     stress, _ = initial_state(case, material, points)
     return stress - case.fluid.biot_alpha * case.initial_pore_pressure * IDENTITY
 

@@ -10,8 +10,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from soilwater.errors import require
 from soilwater.material.kinematics import invariants
 from soilwater.physics.geostatic import buoyant_weight, initial_state
+
+
+#: How far apart (a factor) moduli, loads and the fluid storage may lie (:meth:`Scales.
+#: require_in_range`).
+RANGE = 1e12
 
 
 @dataclass(frozen=True)
@@ -58,10 +64,36 @@ class Scales:
                    (edge.kinds(case.edge_length(side)) for side, edge in case.boundary.items()))
         pin = case.fluid.storage == 0 and not free and not case.boundary.drained
         weight = buoyant_weight(case, state["v"]).max() * case.geometry.height
-        return cls(max([abs(effective).max(), *tractions, weight,
-                        *_footing_stresses(case, modulus), 1e-12]),
-                   modulus, float(min(case.spacing)), pin,
-                   float(np.median(material.moduli(p, state["v"])[1])))
+        scales = cls(max([abs(effective).max(), *tractions, weight,
+                          *_footing_stresses(case, modulus), 1e-12]),
+                     modulus, float(min(case.spacing)), pin,
+                     float(np.median(material.moduli(p, state["v"])[1])))
+        scales.require_in_range(case.fluid.storage)
+        return scales
+
+    def require_in_range(self, storage):
+        """Refuse moduli, loads and a fluid storage so far apart that a step's
+        displacements or pressures fall below round-off: the P-wave modulus within
+        :data:`RANGE` times the largest load or stress either way (when anything loads the
+        soil), and ``storage x modulus`` (how much more compressible the water is than the
+        skeleton) at most :data:`RANGE`.
+
+        Raises
+        ------
+        InputError
+            Naming the two values and that their size or units are the likely cause.
+        """
+        loaded = self.stress > 1e-12
+        require(not loaded or 1 / RANGE <= self.modulus / self.stress <= RANGE,
+                f"the soil's initial P-wave modulus ({self.modulus:.3g}) and the largest load "
+                f"or stress ({self.stress:.3g}) are more than {RANGE:.0e} times apart, which "
+                "puts the displacements or the strains out of double precision: check the "
+                "moduli's and loads' size and units")
+        require(storage * self.modulus <= RANGE,
+                f"material.storage = {storage:.3g} makes the water {storage * self.modulus:.3g} "
+                "times more compressible than the skeleton (P-wave modulus "
+                f"{self.modulus:.3g}): the pore pressure falls below round-off; check its size "
+                "and units (1/kPa in the built-in cases)")
 
     @property
     def perturbation(self):
@@ -90,11 +122,12 @@ class Scales:
 
 
 def _footing_stresses(case, modulus):
-    """Stress scales of the footings [kPa]: ``force / (to - from)`` under load control,
-    ``modulus x rate x time.end / height`` (the oedometric stress of the final
-    settlement over the depth) under velocity control."""
-    for _, seg in case.boundary.segments():
+    """Stress scales of the footings [kPa]: ``force / width`` under load control (``to -
+    from``, or a mesh group's length), ``modulus x rate x time.end / height`` (the
+    oedometric stress of the final settlement over the depth) under velocity control."""
+    for side, seg in case.boundary.segments():
         if seg.load_controlled:
-            yield abs(seg.force) / (seg.end - seg.start)
+            yield abs(seg.force) / (case.edge_length(side) if seg.whole
+                                    else seg.end - seg.start)
         elif seg.footing:
             yield modulus * abs(seg.settlement_rate) * case.time.end / case.geometry.height

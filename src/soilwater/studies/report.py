@@ -70,7 +70,7 @@ def make_report(root="reports", only=None, redraw=False, what="folder"):
     SoilwaterError
         For an unknown study, a study whose needed study has no saved output, a folder
         holding the other resolution's report, or a folder that is not new, empty or a
-        report soilwater wrote (:func:`soilwater.targets.check_report_folder`).
+        report soilwater wrote (:func:`soilwater.studies.harness.folder.check_report_folder`).
 
     Notes
     -----
@@ -81,7 +81,7 @@ def make_report(root="reports", only=None, redraw=False, what="folder"):
     """
     import matplotlib
 
-    from soilwater.targets import check_report_folder, mark_report_folder
+    from soilwater.studies.harness.folder import check_report_folder, mark_report_folder
 
     matplotlib.use("Agg")               # the studies write PNGs, never show them
     names = select(only)
